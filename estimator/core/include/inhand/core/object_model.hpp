@@ -1,0 +1,39 @@
+#pragma once
+// The grasped object: rigid, of known geometry. Built once by io/ (LoadObjectModel).
+#include <array>
+#include <string>
+#include <vector>
+
+#include "inhand/core/mesh.hpp"
+
+namespace inhand {
+
+// An AprilTag glued to the object. Tag frame T: origin at the tag centre, z out of the
+// surface (towards a camera that sees it), x to the right and y up as printed. `size` is the
+// edge of the outer black border, whose corners are what detectors report.
+struct TagPlacement {
+  std::string family = "tag36h11";
+  int id = 0;
+  double size = 0.0;  // [m]
+  Transform T_OT = Transform::Identity();
+  // Outer corners in O, in the detector's order: bottom-left, bottom-right, top-right, top-left.
+  std::array<Vec3, 4> CornersO() const;
+};
+
+struct ObjectModel {
+  std::string name;
+  std::string source;                    // description file
+  std::vector<TriangleMesh> visual;      // object frame O
+  std::vector<ConvexPiece> pieces;       // object frame O, for contacts
+  std::string decomposition;             // how pieces were obtained (for reports)
+  double mass = 0.0;                     // [kg]
+  Vec3 com_O = Vec3::Zero();             // [m]
+  Mat3 inertia_com = Mat3::Identity();   // [kg m²] about the centre of mass, O axes
+  double friction = 0.8;                 // Coulomb coefficient against the fingers
+  std::vector<TagPlacement> tags;
+
+  std::size_t NumVisualTriangles() const;
+  Aabb Bounds() const;  // of the visual meshes
+};
+
+}  // namespace inhand

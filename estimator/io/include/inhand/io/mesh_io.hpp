@@ -1,0 +1,48 @@
+#pragma once
+// Mesh files (through assimp) and convex geometry computations (through Bullet), kept behind
+// this header: callers see only core types.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "inhand/core/mesh.hpp"
+
+namespace inhand {
+
+// Loads every triangle mesh of a file (STL binary/ASCII, OBJ + MTL, COLLADA, glTF/GLB, PLY, ...)
+// with node transforms applied, in the file's units times `scale` (per axis). One TriangleMesh
+// per material. Texture files are resolved relative to the mesh file; embedded textures are
+// kept as encoded blobs. Throws InputError naming the file when it is missing, unreadable,
+// holds no triangles, or names a texture file that does not exist.
+std::vector<TriangleMesh> LoadMeshFile(const std::string& path,
+                                       const Vec3& scale = Vec3::Ones());
+
+// Memoises LoadMeshFile within one model load (hands reuse meshes across links).
+class MeshCache {
+ public:
+  const std::vector<TriangleMesh>& Get(const std::string& path, const Vec3& scale);
+
+ private:
+  std::map<std::string, std::vector<TriangleMesh>> meshes_;
+};
+
+// Convex hull of a point set (Bullet's btConvexHullComputer): a kHull piece whose vertices are
+// the hull's, with outward triangles. Throws InputError (naming `source`) for fewer than 4
+// points or a degenerate (flat) set.
+ConvexPiece ComputeConvexHull(const std::vector<Vec3>& points, const std::string& source);
+
+struct HacdParams {
+  int max_pieces = 16;             // upper bound on convex pieces
+  double concavity = 0.002;        // [m] allowed concavity of a piece
+  int vertices_per_piece = 64;     // hull vertex budget of each piece
+  std::string cache_dir;           // "" → $XDG_CACHE_HOME/inhand or ~/.cache/inhand
+};
+// Approximate convex decomposition with HACD (Bullet extras), cached on disk keyed by the mesh
+// contents and parameters, since it takes about a second per thousand triangles.
+std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParams& params,
+                                       const std::string& source);
+
+// Writes pieces as one OBJ with an object per piece (readable back with "components").
+void WritePiecesObj(const std::vector<ConvexPiece>& pieces, const std::string& path);
+
+}  // namespace inhand
