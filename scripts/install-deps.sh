@@ -6,6 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libbullet-dev libbullet-extras-dev liburdfdom-dev libassimp-dev
+  libtinyxml-dev libconsole-bridge-dev
   libopencv-dev libapriltag-dev libosmesa6-dev libimgui-dev libglfw3-dev libegl-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
   ffmpeg xvfb xauth imagemagick

@@ -66,24 +66,28 @@ Material ReadMaterial(const aiScene& scene, const aiMaterial& ai, const fs::path
 
 }  // namespace
 
-std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scale) {
+std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scale,
+                                       MeshGrouping grouping) {
   if (!fs::exists(path)) throw InputError(path + ": mesh file does not exist");
   if (!fs::is_regular_file(path)) throw InputError(path + ": mesh path is not a file");
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // Keep the file's meshes apart: the grouping below decides what to merge.
+  importer.SetPropertyBool(AI_CONFIG_PP_PTV_KEEP_HIERARCHY, true);
   const aiScene* scene = importer.ReadFile(
       path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
                 aiProcess_PreTransformVertices | aiProcess_GenSmoothNormals);
   if (scene == nullptr || scene->mRootNode == nullptr)
     throw InputError(path + ": cannot read mesh (" + importer.GetErrorString() + ")");
 
-  // One output mesh per material, merging the file's meshes that share it.
+  // One output mesh per material (merging the file's meshes that share it) or per part.
   std::map<unsigned, TriangleMesh> by_material;
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
     const aiMesh& am = *scene->mMeshes[mi];
     if (!(am.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    auto [it, inserted] = by_material.try_emplace(am.mMaterialIndex);
+    const unsigned group = grouping == MeshGrouping::kByMaterial ? am.mMaterialIndex : mi;
+    auto [it, inserted] = by_material.try_emplace(group);
     TriangleMesh& out = it->second;
     if (inserted && am.mMaterialIndex < scene->mNumMaterials)
       out.material = ReadMaterial(*scene, *scene->mMaterials[am.mMaterialIndex], fs::path(path));
@@ -119,12 +123,14 @@ std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scal
   return meshes;
 }
 
-const std::vector<TriangleMesh>& MeshCache::Get(const std::string& path, const Vec3& scale) {
+const std::vector<TriangleMesh>& MeshCache::Get(const std::string& path, const Vec3& scale,
+                                                MeshGrouping grouping) {
   std::ostringstream key;
   key << std::setprecision(17) << path << '|' << scale.x() << ',' << scale.y() << ','
-      << scale.z();
+      << scale.z() << '|' << static_cast<int>(grouping);
   auto it = meshes_.find(key.str());
-  if (it == meshes_.end()) it = meshes_.emplace(key.str(), LoadMeshFile(path, scale)).first;
+  if (it == meshes_.end())
+    it = meshes_.emplace(key.str(), LoadMeshFile(path, scale, grouping)).first;
   return it->second;
 }
 

@@ -13,7 +13,8 @@ namespace inhand {
 namespace {
 
 // Convex pieces of a collision mesh by `method`: "hull" (one piece), "components" (one hull per
-// edge-connected component: a decomposition stored in one file), "hacd" (computed, cached).
+// part of the file and, within a part, per edge-connected component: a decomposition stored in
+// one file), "hacd" (computed, cached).
 void PiecesFromMesh(const std::vector<TriangleMesh>& meshes, const std::string& method,
                     const HacdParams& hacd, const std::string& where,
                     std::vector<ConvexPiece>& out) {
@@ -94,7 +95,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages) 
     if (c.Has("mesh")) {
       const std::string file = ResolveResource(c["mesh"].String(), path, packages);
       const std::string method = c.Has("method") ? c["method"].String() : "components";
-      std::vector<TriangleMesh> meshes = cache.Get(file, c.Has("scale") ? c["scale"].Vector3() : Vec3::Ones());
+      std::vector<TriangleMesh> meshes = cache.Get(
+          file, c.Has("scale") ? c["scale"].Vector3() : Vec3::Ones(), MeshGrouping::kByPart);
       for (TriangleMesh& m : meshes) m.Apply(T);
       PiecesFromMesh(meshes, method, hacd, file, obj.pieces);
       methods.push_back(method + " of " + fs::path(file).filename().string());

@@ -164,7 +164,9 @@ void AddCollisionGeometry(const urdf::Geometry& g, const Transform& T_LG, const 
     case urdf::Geometry::MESH: {
       const auto& m = static_cast<const urdf::Mesh&>(g);
       const std::string file = ResolveResource(m.filename, urdf_path, options.packages);
-      const auto& meshes = cache.Get(file, Vec3(m.scale.x, m.scale.y, m.scale.z));
+      const auto& meshes = cache.Get(file, Vec3(m.scale.x, m.scale.y, m.scale.z),
+                                     options.collision_mesh_components ? MeshGrouping::kByPart
+                                                                       : MeshGrouping::kByMaterial);
       if (options.collision_mesh_components) {
         int index = 0;
         for (const TriangleMesh& mesh : meshes) {

@@ -14,13 +14,19 @@ namespace inhand {
 // per material. Texture files are resolved relative to the mesh file; embedded textures are
 // kept as encoded blobs. Throws InputError naming the file when it is missing, unreadable,
 // holds no triangles, or names a texture file that does not exist.
-std::vector<TriangleMesh> LoadMeshFile(const std::string& path,
-                                       const Vec3& scale = Vec3::Ones());
+enum class MeshGrouping {
+  kByMaterial,  // one mesh per material (drawing)
+  kByPart,      // one mesh per part of the file (OBJ object/group, glTF/COLLADA node mesh):
+                // a convex decomposition stored as parts of one file
+};
+std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scale = Vec3::Ones(),
+                                       MeshGrouping grouping = MeshGrouping::kByMaterial);
 
 // Memoises LoadMeshFile within one model load (hands reuse meshes across links).
 class MeshCache {
  public:
-  const std::vector<TriangleMesh>& Get(const std::string& path, const Vec3& scale);
+  const std::vector<TriangleMesh>& Get(const std::string& path, const Vec3& scale,
+                                       MeshGrouping grouping = MeshGrouping::kByMaterial);
 
  private:
   std::map<std::string, std::vector<TriangleMesh>> meshes_;
