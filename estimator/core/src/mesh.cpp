@@ -142,19 +142,25 @@ bool IsClosed(const TriangleMesh& mesh, double weld_tolerance) {
 
 std::vector<TriangleMesh> ConnectedComponents(const TriangleMesh& mesh, double weld_tolerance) {
   const std::vector<int> id = WeldVertices(mesh.vertices, weld_tolerance);
-  const int num_welded = id.empty() ? 0 : *std::max_element(id.begin(), id.end()) + 1;
-  std::vector<int> parent(num_welded);
+  // Triangles join across manifold edges only (edges with exactly two triangles): convex hulls
+  // stored in one file that touch at a vertex or share an edge stay apart.
+  const int num_tris = static_cast<int>(mesh.triangles.size());
+  std::map<std::pair<int, int>, std::vector<int>> edge_tris;
+  for (int t = 0; t < num_tris; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = id[mesh.triangles[t][k]], b = id[mesh.triangles[t][(k + 1) % 3]];
+      edge_tris[{std::min(a, b), std::max(a, b)}].push_back(t);
+    }
+  std::vector<int> parent(num_tris);
   std::iota(parent.begin(), parent.end(), 0);
-  for (const auto& t : mesh.triangles) {
-    const int r0 = FindRoot(parent, id[t[0]]);
-    parent[FindRoot(parent, id[t[1]])] = r0;
-    parent[FindRoot(parent, id[t[2]])] = r0;
-  }
-  std::map<int, int> component_of_root;  // ordered: deterministic component order
+  for (const auto& [edge, tris] : edge_tris)
+    if (tris.size() == 2) parent[FindRoot(parent, tris[1])] = FindRoot(parent, tris[0]);
   std::vector<TriangleMesh> out;
   std::vector<std::vector<int>> remap;
-  for (const auto& t : mesh.triangles) {
-    const int root = FindRoot(parent, id[t[0]]);
+  std::map<int, int> component_of_root;  // first triangle order: deterministic
+  for (int ti = 0; ti < num_tris; ++ti) {
+    const Eigen::Vector3i& t = mesh.triangles[ti];
+    const int root = FindRoot(parent, ti);
     auto [it, inserted] = component_of_root.emplace(root, static_cast<int>(out.size()));
     if (inserted) {
       out.emplace_back();

@@ -173,6 +173,25 @@ ConvexPiece ComputeConvexHull(const std::vector<Vec3>& points, const std::string
   return piece;
 }
 
+std::vector<ConvexPiece> ComponentHulls(const std::vector<TriangleMesh>& meshes,
+                                        const std::string& source) {
+  std::vector<ConvexPiece> pieces;
+  int index = 0;
+  for (const TriangleMesh& mesh : meshes) {
+    for (const TriangleMesh& part : ConnectedComponents(mesh, 1e-9)) {
+      const std::string where = source + " (component " + std::to_string(index++) + ")";
+      if (part.vertices.size() < 4) continue;
+      try {
+        pieces.push_back(ComputeConvexHull(part.vertices, where));
+      } catch (const InputError&) {
+        // flat fragment
+      }
+    }
+  }
+  if (pieces.empty()) throw InputError(source + ": no component encloses a volume");
+  return pieces;
+}
+
 namespace {
 
 std::string CacheDir(const HacdParams& params) {
@@ -193,7 +212,7 @@ std::uint64_t HashMesh(const TriangleMesh& mesh, const HacdParams& params) {
   };
   for (const Vec3& v : mesh.vertices) mix(v.data(), sizeof(double) * 3);
   for (const auto& t : mesh.triangles) mix(t.data(), sizeof(int) * 3);
-  mix(&params.max_pieces, sizeof(params.max_pieces));
+  mix(&params.min_pieces, sizeof(params.min_pieces));
   mix(&params.concavity, sizeof(params.concavity));
   mix(&params.vertices_per_piece, sizeof(params.vertices_per_piece));
   return h;
@@ -244,8 +263,8 @@ void WritePiecesObj(const std::vector<ConvexPiece>& pieces, const std::string& p
 
 std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParams& params,
                                        const std::string& source) {
-  if (params.max_pieces < 1 || params.vertices_per_piece < 4 || !(params.concavity > 0.0))
-    throw InputError(source + ": HACD parameters need max_pieces >= 1, vertices_per_piece >= 4, "
+  if (params.min_pieces < 1 || params.vertices_per_piece < 4 || !(params.concavity > 0.0))
+    throw InputError(source + ": HACD parameters need min_pieces >= 1, vertices_per_piece >= 4, "
                      "concavity > 0");
   const fs::path dir = CacheDir(params);
   std::ostringstream name;
@@ -265,14 +284,15 @@ std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParam
   hacd.SetNTriangles(triangles.size());
   hacd.SetCompacityWeight(0.1);
   hacd.SetVolumeWeight(0.0);
-  hacd.SetNClusters(static_cast<std::size_t>(params.max_pieces));
+  hacd.SetNClusters(static_cast<std::size_t>(params.min_pieces));
   hacd.SetNVerticesPerCH(static_cast<std::size_t>(params.vertices_per_piece));
-  // HACD normalises the mesh to a unit box: express the concavity in that scale.
+  // HACD normalises the mesh so that its bounding-box diagonal spans 2 * scale (scale = 1000
+  // by default): express the concavity in those units.
   const double diagonal = mesh.Bounds().Size().norm();
-  hacd.SetConcavity(params.concavity / std::max(diagonal, 1e-9));
-  hacd.SetAddExtraDistPoints(false);
+  hacd.SetConcavity(params.concavity * 2.0 * hacd.GetScaleFactor() / std::max(diagonal, 1e-12));
+  hacd.SetAddExtraDistPoints(true);
   hacd.SetAddNeighboursDistPoints(false);
-  hacd.SetAddFacesPoints(false);
+  hacd.SetAddFacesPoints(true);
   if (!hacd.Compute()) throw InputError(source + ": HACD decomposition failed");
 
   std::vector<ConvexPiece> pieces;
@@ -283,7 +303,11 @@ std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParam
     std::vector<Vec3> pts;
     for (const auto& p : ch_points) pts.emplace_back(p.X(), p.Y(), p.Z());
     if (pts.size() < 4) continue;
-    pieces.push_back(ComputeConvexHull(pts, source + " (HACD piece " + std::to_string(c) + ")"));
+    try {
+      pieces.push_back(ComputeConvexHull(pts, source + " (HACD piece " + std::to_string(c) + ")"));
+    } catch (const InputError&) {
+      // A flat sliver carries no volume: GJK loses nothing without it.
+    }
   }
   std::error_code ec;
   fs::create_directories(dir, ec);

@@ -23,14 +23,7 @@ void PiecesFromMesh(const std::vector<TriangleMesh>& meshes, const std::string& 
     for (const TriangleMesh& m : meshes) points.insert(points.end(), m.vertices.begin(), m.vertices.end());
     out.push_back(ComputeConvexHull(points, where));
   } else if (method == "components") {
-    int index = 0;
-    for (const TriangleMesh& m : meshes) {
-      for (const TriangleMesh& part : ConnectedComponents(m, 1e-7)) {
-        const std::string src = where + " (component " + std::to_string(index++) + ")";
-        if (part.vertices.size() < 4) continue;  // stray faces carry no volume
-        out.push_back(ComputeConvexHull(part.vertices, src));
-      }
-    }
+    for (ConvexPiece& p : ComponentHulls(meshes, where)) out.push_back(std::move(p));
   } else if (method == "hacd") {
     TriangleMesh merged;
     for (const TriangleMesh& m : meshes) {
@@ -82,7 +75,7 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages) 
   HacdParams hacd;
   if (root.Has("hacd")) {
     const jsonf::Field h = root["hacd"];
-    if (h.Has("max_pieces")) hacd.max_pieces = h["max_pieces"].Integer();
+    if (h.Has("min_pieces")) hacd.min_pieces = h["min_pieces"].Integer();
     if (h.Has("concavity")) hacd.concavity = h["concavity"].PositiveNumber();
     if (h.Has("vertices_per_piece")) hacd.vertices_per_piece = h["vertices_per_piece"].Integer();
   }

@@ -168,14 +168,9 @@ void AddCollisionGeometry(const urdf::Geometry& g, const Transform& T_LG, const 
                                      options.collision_mesh_components ? MeshGrouping::kByPart
                                                                        : MeshGrouping::kByMaterial);
       if (options.collision_mesh_components) {
-        int index = 0;
-        for (const TriangleMesh& mesh : meshes) {
-          for (TriangleMesh& part : ConnectedComponents(mesh, 1e-7)) {
-            const std::string src = file + " (component " + std::to_string(index++) + ")";
-            if (part.vertices.size() < 4) continue;
-            part.Apply(T_LG);
-            out.push_back(ComputeConvexHull(part.vertices, src));
-          }
+        for (ConvexPiece& piece : ComponentHulls(meshes, file)) {
+          piece.Apply(T_LG);
+          out.push_back(std::move(piece));
         }
         return;
       }

@@ -64,7 +64,8 @@ MassProperties ComputeMassProperties(const std::vector<const TriangleMesh*>& mes
 // exactly two triangles with opposite orientation.
 bool IsClosed(const TriangleMesh& mesh, double weld_tolerance = 1e-9);
 
-// Splits a mesh into its edge-connected components (vertices welded by position).
+// Splits a mesh into its edge-connected components (vertices welded by position; triangles
+// connect across edges shared by exactly two triangles).
 std::vector<TriangleMesh> ConnectedComponents(const TriangleMesh& mesh,
                                               double weld_tolerance = 1e-9);
 

@@ -37,9 +37,14 @@ class MeshCache {
 // points or a degenerate (flat) set.
 ConvexPiece ComputeConvexHull(const std::vector<Vec3>& points, const std::string& source);
 
+// One convex hull per edge-connected component of each mesh: a convex decomposition stored in
+// one file. Flat or tiny fragments (a few stray triangles, no volume) are dropped.
+std::vector<ConvexPiece> ComponentHulls(const std::vector<TriangleMesh>& meshes,
+                                        const std::string& source);
+
 struct HacdParams {
-  int max_pieces = 16;             // upper bound on convex pieces
-  double concavity = 0.002;        // [m] allowed concavity of a piece
+  int min_pieces = 1;              // HACD stops merging at this many pieces
+  double concavity = 0.002;        // [m] allowed concavity of a piece: decides the count
   int vertices_per_piece = 64;     // hull vertex budget of each piece
   std::string cache_dir;           // "" → $XDG_CACHE_HOME/inhand or ~/.cache/inhand
 };

@@ -1,0 +1,128 @@
+#pragma once
+// Session format v1 (sessions/FORMAT.md is the normative text): a directory with session.json,
+// joints.csv, camera.csv + images/, and optionally groundtruth.csv. Reading validates
+// everything up front and throws InputError naming the file, line and column at fault.
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "inhand/core/hand_model.hpp"
+#include "inhand/core/image.hpp"
+#include "inhand/core/intrinsics.hpp"
+#include "inhand/core/object_model.hpp"
+
+namespace inhand {
+
+struct SessionInfo {
+  std::string name;
+  // Paths as written in session.json (relative ones are relative to the session directory).
+  std::string hand_urdf;
+  std::map<std::string, std::string> packages;  // package name → directory
+  std::string object;                           // object description (.json or .urdf)
+  std::optional<Intrinsics> camera;             // absent: no images
+  Transform initial_T_PO = Transform::Identity();
+  double sigma_position = 0.020;                // [m]   initial σ of the object position
+  double sigma_orientation = 5.0 * M_PI / 180;  // [rad] initial σ of the object orientation
+  double sigma_joint_bias = 5.0 * M_PI / 180;   // [rad] initial σ of each joint bias
+  // Free-form provenance (simulator, scenario, seed, noise profile, ...), kept as JSON text.
+  std::string provenance_json = "{}";
+};
+
+struct CameraFrame {
+  double t = 0.0;           // [s]
+  std::string image;        // relative to the session directory
+  Transform T_PC;           // camera pose in the palm frame at t
+};
+
+struct GroundTruthSample {
+  double t = 0.0;
+  Transform T_PO;
+};
+
+class Session {
+ public:
+  // Reads and validates a session directory. Throws InputError.
+  static Session Load(const std::string& dir);
+
+  const std::string& dir() const { return dir_; }
+  const SessionInfo& info() const { return info_; }
+  std::string Resolve(const std::string& relative) const;  // path inside the session
+
+  // Joint samples, in the order of joint_names() (the file's column order).
+  const std::vector<std::string>& joint_names() const { return joint_names_; }
+  int num_samples() const { return static_cast<int>(t_.size()); }
+  double t(int k) const { return t_[k]; }
+  Eigen::Ref<const Eigen::VectorXd> q(int k) const { return q_.row(k).transpose(); }
+  Eigen::Ref<const Eigen::VectorXd> tau(int k) const { return tau_.row(k).transpose(); }
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& q_all() const { return q_; }
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& tau_all() const { return tau_; }
+
+  const std::vector<CameraFrame>& camera_frames() const { return frames_; }
+  // Decodes frame i's image (RGB). Throws InputError when unreadable or of the wrong size.
+  Image8 LoadImage(int i) const;
+
+  bool has_groundtruth() const { return !groundtruth_.empty(); }
+  const std::vector<GroundTruthSample>& groundtruth() const { return groundtruth_; }
+  // Ground truth at time t: linear in position, slerp in orientation; clamps at the ends.
+  Transform GroundTruthAt(double t) const;
+
+  // Reorders the joint columns into `hand`'s configuration order. Throws InputError when a
+  // column names a joint the URDF does not have, or a joint of the hand has no column.
+  void MatchJoints(const HandModel& hand);
+
+ private:
+  std::string dir_;
+  SessionInfo info_;
+  std::vector<std::string> joint_names_;
+  std::vector<double> t_;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> q_, tau_;
+  std::vector<CameraFrame> frames_;
+  std::vector<GroundTruthSample> groundtruth_;
+};
+
+// The hand and object a session refers to, loaded through io/ with the session's package map,
+// and the session's joints matched to the hand.
+struct SessionModels {
+  HandModel hand;
+  ObjectModel object;
+};
+SessionModels LoadSessionModels(Session& session, bool load_visual_meshes = true);
+
+// Writes a session into a temporary directory beside `dir` and renames it into place on
+// Commit(), so a failed run never leaves a half-written session. Destroying an uncommitted
+// writer removes the temporary directory.
+class SessionWriter {
+ public:
+  SessionWriter(std::string dir, SessionInfo info, std::vector<std::string> joint_names,
+                bool overwrite = false);
+  ~SessionWriter();
+  SessionWriter(const SessionWriter&) = delete;
+  SessionWriter& operator=(const SessionWriter&) = delete;
+
+  void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& tau);
+  // Writes images/frame_NNNNNN.png at once.
+  void AddCameraFrame(double t, const Image8& image, const Transform& T_PC);
+  void AddGroundTruth(double t, const Transform& T_PO);
+  // Any extra file (e.g. the simulator's true biases), relative to the session directory.
+  void AddFile(const std::string& relative_path, const std::string& contents);
+  void Commit();
+
+  const std::string& temp_dir() const { return tmp_; }
+
+ private:
+  std::string dir_, tmp_;
+  SessionInfo info_;
+  std::vector<std::string> joint_names_;
+  bool overwrite_;
+  bool committed_ = false;
+  std::string joints_csv_, camera_csv_, groundtruth_csv_;
+  int num_frames_ = 0;
+  double last_joint_t_ = -std::numeric_limits<double>::infinity();
+};
+
+// Shortest decimal text that reads back to the same double (std::to_chars).
+std::string FormatDouble(double v);
+
+}  // namespace inhand

@@ -1,0 +1,471 @@
+#include "inhand/sessions/session.hpp"
+
+#include <unistd.h>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "inhand/core/error.hpp"
+#include "inhand/io/detail/json_fields.hpp"
+#include "inhand/io/object_loader.hpp"
+#include "inhand/io/urdf_loader.hpp"
+
+namespace fs = std::filesystem;
+
+namespace inhand {
+
+std::string FormatDouble(double v) {
+  char buf[64];
+  const auto res = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, res.ptr);
+}
+
+namespace {
+
+constexpr int kFormatVersion = 1;
+
+// ---------------------------------------------------------------------------------------------
+// CSV: comma-separated, one header line, no quoting (names and paths must not hold commas).
+
+struct CsvRow {
+  int line = 0;
+  std::vector<std::string> fields;
+};
+
+struct Csv {
+  std::string file;
+  std::vector<std::string> header;
+  std::vector<CsvRow> rows;
+};
+
+std::vector<std::string> SplitCsvLine(const std::string& line) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = line.find(',', start);
+    std::string field = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    while (!field.empty() && (field.back() == ' ' || field.back() == '\t')) field.pop_back();
+    std::size_t lead = 0;
+    while (lead < field.size() && (field[lead] == ' ' || field[lead] == '\t')) ++lead;
+    out.push_back(field.substr(lead));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+Csv ReadCsv(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open (missing file?)");
+  Csv csv;
+  csv.file = path;
+  std::string line;
+  int number = 0;
+  bool have_header = false;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    if (!have_header) {
+      csv.header = SplitCsvLine(line);
+      have_header = true;
+      std::set<std::string> seen;
+      for (const std::string& h : csv.header)
+        if (!seen.insert(h).second)
+          throw InputError(path + ":" + std::to_string(number) + ": column '" + h + "' appears twice");
+      continue;
+    }
+    CsvRow row{number, SplitCsvLine(line)};
+    if (row.fields.size() != csv.header.size())
+      throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(row.fields.size()) +
+                       " columns, expected " + std::to_string(csv.header.size()) + " as in the header");
+    csv.rows.push_back(std::move(row));
+  }
+  if (!have_header) throw InputError(path + ": empty file, expected a header line");
+  return csv;
+}
+
+double ParseNumber(const Csv& csv, const CsvRow& row, std::size_t col) {
+  const std::string& s = row.fields[col];
+  double v = 0.0;
+  const char* begin = s.data();
+  const char* end = s.data() + s.size();
+  if (!s.empty() && *begin == '+') ++begin;
+  const auto res = std::from_chars(begin, end, v);
+  if (s.empty() || res.ec != std::errc() || res.ptr != end || !std::isfinite(v))
+    throw InputError(csv.file + ":" + std::to_string(row.line) + ": column '" + csv.header[col] +
+                     "' is '" + s + "', expected a finite number");
+  return v;
+}
+
+void RequireHeader(const Csv& csv, const std::vector<std::string>& expected) {
+  if (csv.header != expected) {
+    std::string e;
+    for (const auto& h : expected) e += (e.empty() ? "" : ",") + h;
+    throw InputError(csv.file + ":1: header must be '" + e + "'");
+  }
+}
+
+void RequireIncreasing(const Csv& csv, const CsvRow& row, double prev, double t) {
+  if (!(t > prev))
+    throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) +
+                     " does not increase (previous " + FormatDouble(prev) + ")");
+}
+
+// px,py,pz,qw,qx,qy,qz starting at column `c`.
+Transform ParsePose(const Csv& csv, const CsvRow& row, std::size_t c) {
+  const Vec3 p(ParseNumber(csv, row, c), ParseNumber(csv, row, c + 1), ParseNumber(csv, row, c + 2));
+  const Quat q(ParseNumber(csv, row, c + 3), ParseNumber(csv, row, c + 4),
+               ParseNumber(csv, row, c + 5), ParseNumber(csv, row, c + 6));
+  if (std::abs(q.norm() - 1.0) > 1e-3)
+    throw InputError(csv.file + ":" + std::to_string(row.line) + ": quaternion (qw, qx, qy, qz) has norm " +
+                     FormatDouble(q.norm()) + ", expected 1 ± 1e-3");
+  return MakeTransform(p, q);
+}
+
+const std::vector<std::string> kPoseColumns = {"px", "py", "pz", "qw", "qx", "qy", "qz"};
+
+std::string PoseFields(const Transform& T) {
+  const Quat q(T.linear());
+  const Vec3& p = T.translation();
+  std::string s;
+  for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()}) s += "," + FormatDouble(v);
+  return s;
+}
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw InputError(path.string() + ": cannot write");
+  out << text;
+  if (!out) throw InputError(path.string() + ": write failed");
+}
+
+}  // namespace
+
+// -----------------------------------------------------------------------------------------------
+
+std::string Session::Resolve(const std::string& relative) const {
+  const fs::path p(relative);
+  return p.is_absolute() ? p.string() : (fs::path(dir_) / p).lexically_normal().string();
+}
+
+Session Session::Load(const std::string& dir) {
+  if (!fs::is_directory(dir)) throw InputError(dir + ": session directory not found");
+  Session s;
+  s.dir_ = dir;
+  const std::string json_path = (fs::path(dir) / "session.json").string();
+  if (!fs::exists(json_path)) throw InputError(json_path + ": missing (every session has one)");
+  const jsonf::Json doc = jsonf::ReadFile(json_path);
+  const jsonf::Field root{doc, json_path, ""};
+  if (root["format"].String() != "inhand-session") root["format"].Fail("\"inhand-session\"");
+  if (root["version"].Integer() != kFormatVersion)
+    root["version"].Fail("version " + std::to_string(kFormatVersion) + " (this build reads v1)");
+  SessionInfo& info = s.info_;
+  info.name = root.Has("name") ? root["name"].String() : fs::path(dir).filename().string();
+  info.hand_urdf = root["hand"]["urdf"].String();
+  if (root["hand"].Has("packages")) {
+    const jsonf::Field pk = root["hand"]["packages"];
+    if (!pk.value.is_object()) pk.Fail("an object {\"NAME\": \"DIR\"}");
+    for (auto it = pk.value.begin(); it != pk.value.end(); ++it)
+      info.packages[it.key()] = pk[it.key()].String();
+  }
+  info.object = root["object"]["model"].String();
+  if (root.Has("conventions")) {
+    const jsonf::Field c = root["conventions"];
+    if (c.Has("quaternion") && c["quaternion"].String() != "wxyz") c["quaternion"].Fail("\"wxyz\"");
+    if (c.Has("torque") && c["torque"].String() != "external")
+      c["torque"].Fail("\"external\" (joint torques of contact forces only, see FORMAT.md)");
+    if (c.Has("length") && c["length"].String() != "m") c["length"].Fail("\"m\"");
+    if (c.Has("angle") && c["angle"].String() != "rad") c["angle"].Fail("\"rad\"");
+  }
+  if (root.Has("camera") && !root["camera"].value.is_null()) {
+    const jsonf::Field c = root["camera"];
+    Intrinsics K;
+    K.width = c["width"].Integer();
+    K.height = c["height"].Integer();
+    K.fx = c["fx"].Number();
+    K.fy = c["fy"].Number();
+    K.cx = c["cx"].Number();
+    K.cy = c["cy"].Number();
+    if (c.Has("distortion")) {
+      const jsonf::Field d = c["distortion"];
+      if (d.Size() != 5) d.Fail("5 coefficients (k1, k2, p1, p2, k3)");
+      for (std::size_t i = 0; i < 5; ++i) K.distortion[i] = d.At(i).Number();
+    }
+    K.Validate(json_path);
+    info.camera = K;
+  }
+  const jsonf::Field init = root["initial_estimate"];
+  info.initial_T_PO = init["T_PO"].Pose();
+  info.sigma_position = init["sigma_position"].PositiveNumber();
+  info.sigma_orientation = init["sigma_orientation"].PositiveNumber();
+  info.sigma_joint_bias = init["sigma_joint_bias"].NonNegativeNumber();
+  if (root.Has("provenance")) info.provenance_json = root["provenance"].value.dump();
+
+  // joints.csv: t, q:<joint>..., tau:<joint>...
+  const Csv joints = ReadCsv((fs::path(dir) / "joints.csv").string());
+  if (joints.header.empty() || joints.header[0] != "t")
+    throw InputError(joints.file + ":1: first column must be 't'");
+  const std::size_t m2 = joints.header.size() - 1;
+  if (m2 == 0 || m2 % 2 != 0)
+    throw InputError(joints.file + ":1: expected t, then q:NAME for every joint, then tau:NAME for "
+                     "every joint (got " + std::to_string(m2) + " columns after t)");
+  const std::size_t m = m2 / 2;
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::string& qh = joints.header[1 + j];
+    const std::string& th = joints.header[1 + m + j];
+    if (qh.rfind("q:", 0) != 0 || qh.size() < 3)
+      throw InputError(joints.file + ":1: column " + std::to_string(2 + j) + " is '" + qh + "', expected q:NAME");
+    const std::string name = qh.substr(2);
+    if (th != "tau:" + name)
+      throw InputError(joints.file + ":1: column " + std::to_string(2 + m + j) + " is '" + th +
+                       "', expected 'tau:" + name + "' (torques in the order of the positions)");
+    s.joint_names_.push_back(name);
+  }
+  if (joints.rows.empty()) throw InputError(joints.file + ": no samples");
+  const long n = static_cast<long>(joints.rows.size());
+  s.q_.resize(n, static_cast<long>(m));
+  s.tau_.resize(n, static_cast<long>(m));
+  double prev = -std::numeric_limits<double>::infinity();
+  for (long k = 0; k < n; ++k) {
+    const CsvRow& row = joints.rows[static_cast<std::size_t>(k)];
+    const double t = ParseNumber(joints, row, 0);
+    RequireIncreasing(joints, row, prev, t);
+    prev = t;
+    s.t_.push_back(t);
+    for (std::size_t j = 0; j < m; ++j) {
+      s.q_(k, static_cast<long>(j)) = ParseNumber(joints, row, 1 + j);
+      s.tau_(k, static_cast<long>(j)) = ParseNumber(joints, row, 1 + m + j);
+    }
+  }
+
+  // camera.csv: t, image, pose of the camera in P.
+  const fs::path camera_csv = fs::path(dir) / "camera.csv";
+  if (info.camera && !fs::exists(camera_csv))
+    throw InputError(camera_csv.string() + ": missing, but session.json declares a camera");
+  if (fs::exists(camera_csv)) {
+    if (!info.camera)
+      throw InputError(json_path + ": camera.csv exists but session.json has no \"camera\" intrinsics");
+    const Csv cam = ReadCsv(camera_csv.string());
+    std::vector<std::string> expected = {"t", "image"};
+    expected.insert(expected.end(), kPoseColumns.begin(), kPoseColumns.end());
+    RequireHeader(cam, expected);
+    prev = -std::numeric_limits<double>::infinity();
+    for (const CsvRow& row : cam.rows) {
+      CameraFrame f;
+      f.t = ParseNumber(cam, row, 0);
+      RequireIncreasing(cam, row, prev, f.t);
+      prev = f.t;
+      f.image = row.fields[1];
+      if (f.image.empty() || !fs::is_regular_file(s.Resolve(f.image)))
+        throw InputError(cam.file + ":" + std::to_string(row.line) + ": image '" + f.image +
+                         "' not found in the session");
+      f.T_PC = ParsePose(cam, row, 2);
+      s.frames_.push_back(f);
+    }
+  }
+
+  const fs::path gt_csv = fs::path(dir) / "groundtruth.csv";
+  if (fs::exists(gt_csv)) {
+    const Csv gt = ReadCsv(gt_csv.string());
+    std::vector<std::string> expected = {"t"};
+    expected.insert(expected.end(), kPoseColumns.begin(), kPoseColumns.end());
+    RequireHeader(gt, expected);
+    prev = -std::numeric_limits<double>::infinity();
+    for (const CsvRow& row : gt.rows) {
+      GroundTruthSample g;
+      g.t = ParseNumber(gt, row, 0);
+      RequireIncreasing(gt, row, prev, g.t);
+      prev = g.t;
+      g.T_PO = ParsePose(gt, row, 1);
+      s.groundtruth_.push_back(g);
+    }
+  }
+  return s;
+}
+
+Image8 Session::LoadImage(int i) const {
+  INHAND_CHECK(i >= 0 && i < static_cast<int>(frames_.size()), "camera frame index out of range");
+  const std::string path = Resolve(frames_[static_cast<std::size_t>(i)].image);
+  const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
+  if (bgr.empty()) throw InputError(path + ": unreadable image");
+  const Intrinsics& K = *info_.camera;
+  if (bgr.cols != K.width || bgr.rows != K.height)
+    throw InputError(path + ": image is " + std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows) +
+                     ", session.json's camera says " + std::to_string(K.width) + "x" +
+                     std::to_string(K.height));
+  Image8 out(bgr.cols, bgr.rows, 3);
+  cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  return out;
+}
+
+Transform Session::GroundTruthAt(double t) const {
+  INHAND_CHECK(!groundtruth_.empty(), "session has no ground truth");
+  if (t <= groundtruth_.front().t) return groundtruth_.front().T_PO;
+  if (t >= groundtruth_.back().t) return groundtruth_.back().T_PO;
+  const auto it = std::upper_bound(groundtruth_.begin(), groundtruth_.end(), t,
+                                   [](double v, const GroundTruthSample& g) { return v < g.t; });
+  const GroundTruthSample& b = *it;
+  const GroundTruthSample& a = *(it - 1);
+  const double w = (t - a.t) / (b.t - a.t);
+  const Quat qa(a.T_PO.linear()), qb(b.T_PO.linear());
+  return MakeTransform((1.0 - w) * a.T_PO.translation() + w * b.T_PO.translation(), qa.slerp(w, qb));
+}
+
+void Session::MatchJoints(const HandModel& hand) {
+  const std::vector<std::string> names = hand.QNames();
+  std::vector<long> column(names.size(), -1);
+  for (std::size_t c = 0; c < joint_names_.size(); ++c) {
+    const auto it = std::find(names.begin(), names.end(), joint_names_[c]);
+    if (it == names.end())
+      throw InputError(Resolve("joints.csv") + ":1: joint '" + joint_names_[c] +
+                       "' is not a moving, independent joint of " + hand.source);
+    column[static_cast<std::size_t>(it - names.begin())] = static_cast<long>(c);
+  }
+  for (std::size_t j = 0; j < names.size(); ++j)
+    if (column[j] < 0)
+      throw InputError(Resolve("joints.csv") + ":1: no column for joint '" + names[j] + "' of " +
+                       hand.source + " (" + std::to_string(names.size()) + " joints expected)");
+  auto reorder = [&](auto& M) {
+    auto copy = M;
+    for (std::size_t j = 0; j < column.size(); ++j) M.col(static_cast<long>(j)) = copy.col(column[j]);
+  };
+  reorder(q_);
+  reorder(tau_);
+  joint_names_ = names;
+}
+
+SessionModels LoadSessionModels(Session& session, bool load_visual_meshes) {
+  PackageMap packages;
+  for (const auto& [name, d] : session.info().packages) {
+    const std::string resolved = session.Resolve(d);
+    if (!fs::is_directory(resolved))
+      throw InputError(session.Resolve("session.json") + ": package '" + name + "' maps to '" + d +
+                       "', which is not a directory");
+    packages.dirs[name] = resolved;
+  }
+  HandLoadOptions options;
+  options.packages = packages;
+  options.load_visual_meshes = load_visual_meshes;
+  SessionModels models{LoadHandModel(session.Resolve(session.info().hand_urdf), options),
+                       LoadObjectModel(session.Resolve(session.info().object), packages)};
+  session.MatchJoints(models.hand);
+  return models;
+}
+
+// -----------------------------------------------------------------------------------------------
+
+SessionWriter::SessionWriter(std::string dir, SessionInfo info, std::vector<std::string> joint_names,
+                             bool overwrite)
+    : dir_(std::move(dir)), info_(std::move(info)), joint_names_(std::move(joint_names)), overwrite_(overwrite) {
+  if (joint_names_.empty()) throw InputError("session writer: no joints");
+  fs::path final_path = fs::absolute(dir_).lexically_normal();
+  if (final_path.filename().empty()) final_path = final_path.parent_path();
+  if (fs::exists(final_path) && !overwrite_)
+    throw InputError(dir_ + ": already exists (pass overwrite to replace it)");
+  tmp_ = (final_path.parent_path() / ("." + final_path.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
+  std::error_code ec;
+  fs::remove_all(tmp_, ec);
+  fs::create_directories(fs::path(tmp_) / "images", ec);
+  if (ec) throw InputError(tmp_ + ": cannot create (" + ec.message() + ")");
+  joints_csv_ = "t";
+  for (const auto& n : joint_names_) joints_csv_ += ",q:" + n;
+  for (const auto& n : joint_names_) joints_csv_ += ",tau:" + n;
+  joints_csv_ += "\n";
+  camera_csv_ = "t,image";
+  groundtruth_csv_ = "t";
+  for (const auto& c : kPoseColumns) camera_csv_ += "," + c, groundtruth_csv_ += "," + c;
+  camera_csv_ += "\n";
+  groundtruth_csv_ += "\n";
+}
+
+SessionWriter::~SessionWriter() {
+  if (!committed_) {
+    std::error_code ec;
+    fs::remove_all(tmp_, ec);
+  }
+}
+
+void SessionWriter::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                   const Eigen::Ref<const Eigen::VectorXd>& tau) {
+  INHAND_CHECK(q.size() == static_cast<long>(joint_names_.size()) && tau.size() == q.size(),
+               "joint sample size does not match the joint names");
+  INHAND_CHECK(t > last_joint_t_, "joint samples must be added in increasing time");
+  last_joint_t_ = t;
+  joints_csv_ += FormatDouble(t);
+  for (long j = 0; j < q.size(); ++j) joints_csv_ += "," + FormatDouble(q[j]);
+  for (long j = 0; j < tau.size(); ++j) joints_csv_ += "," + FormatDouble(tau[j]);
+  joints_csv_ += "\n";
+}
+
+void SessionWriter::AddCameraFrame(double t, const Image8& image, const Transform& T_PC) {
+  INHAND_CHECK(info_.camera.has_value(), "camera frames need camera intrinsics in SessionInfo");
+  INHAND_CHECK(image.width == info_.camera->width && image.height == info_.camera->height &&
+                   image.channels == 3,
+               "camera frame must be RGB of the intrinsics' size");
+  char name[64];
+  std::snprintf(name, sizeof(name), "images/frame_%06d.png", num_frames_++);
+  cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<std::uint8_t*>(image.data.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  const std::string path = (fs::path(tmp_) / name).string();
+  if (!cv::imwrite(path, bgr)) throw InputError(path + ": cannot write image");
+  camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
+}
+
+void SessionWriter::AddGroundTruth(double t, const Transform& T_PO) {
+  groundtruth_csv_ += FormatDouble(t) + PoseFields(T_PO) + "\n";
+}
+
+void SessionWriter::AddFile(const std::string& relative_path, const std::string& contents) {
+  const fs::path p = fs::path(tmp_) / relative_path;
+  fs::create_directories(p.parent_path());
+  WriteText(p, contents);
+}
+
+void SessionWriter::Commit() {
+  INHAND_CHECK(!committed_, "session already committed");
+  jsonf::Json doc = {{"format", "inhand-session"},
+                     {"version", kFormatVersion},
+                     {"name", info_.name},
+                     {"hand", {{"urdf", info_.hand_urdf}}},
+                     {"object", {{"model", info_.object}}},
+                     {"conventions", {{"quaternion", "wxyz"}, {"torque", "external"}, {"length", "m"}, {"angle", "rad"}}},
+                     {"initial_estimate",
+                      {{"T_PO", jsonf::PoseToJson(info_.initial_T_PO)},
+                       {"sigma_position", info_.sigma_position},
+                       {"sigma_orientation", info_.sigma_orientation},
+                       {"sigma_joint_bias", info_.sigma_joint_bias}}},
+                     {"provenance", jsonf::Json::parse(info_.provenance_json)}};
+  if (!info_.packages.empty()) doc["hand"]["packages"] = info_.packages;
+  if (info_.camera) {
+    const Intrinsics& K = *info_.camera;
+    doc["camera"] = {{"width", K.width}, {"height", K.height}, {"fx", K.fx}, {"fy", K.fy},
+                     {"cx", K.cx}, {"cy", K.cy},
+                     {"distortion", {K.distortion[0], K.distortion[1], K.distortion[2], K.distortion[3], K.distortion[4]}}};
+  }
+  WriteText(fs::path(tmp_) / "session.json", doc.dump(2) + "\n");
+  WriteText(fs::path(tmp_) / "joints.csv", joints_csv_);
+  if (info_.camera) WriteText(fs::path(tmp_) / "camera.csv", camera_csv_);
+  if (groundtruth_csv_.find('\n') + 1 < groundtruth_csv_.size())
+    WriteText(fs::path(tmp_) / "groundtruth.csv", groundtruth_csv_);
+  if (num_frames_ == 0) fs::remove(fs::path(tmp_) / "images");
+  fs::path final_path = fs::absolute(dir_).lexically_normal();
+  if (fs::exists(final_path)) {
+    if (!overwrite_) throw InputError(dir_ + ": appeared while writing; not replaced");
+    fs::remove_all(final_path);
+  }
+  fs::create_directories(final_path.parent_path());
+  fs::rename(tmp_, final_path);
+  committed_ = true;
+}
+
+}  // namespace inhand

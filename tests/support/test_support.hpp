@@ -1,0 +1,53 @@
+#pragma once
+// Shared test helpers: where the repository and ../shared/assets are, temp directories, and
+// running the inhand binary.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <random>
+#include <string>
+
+namespace inhand::test {
+
+inline std::string SourceDir() { return INHAND_SOURCE_DIR; }
+inline std::string ProjectAsset(const std::string& rel) { return SourceDir() + "/assets/" + rel; }
+
+// ../shared/assets beside the repository, or "" when absent (tests then skip).
+inline std::string SharedAssets() {
+  const std::filesystem::path p = std::filesystem::path(SourceDir()).parent_path() / "shared" / "assets";
+  return std::filesystem::is_directory(p) ? p.string() : std::string();
+}
+
+#define INHAND_REQUIRE_SHARED_ASSETS()                                            \
+  do {                                                                            \
+    if (::inhand::test::SharedAssets().empty())                                   \
+      GTEST_SKIP() << "../shared/assets is absent: third-party assets not tested"; \
+  } while (false)
+
+// A fresh directory under the build's temp area, removed at destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::string& path() const { return path_; }
+  std::string operator/(const std::string& rel) const { return path_ + "/" + rel; }
+  void Write(const std::string& rel, const std::string& contents) const;
+
+ private:
+  std::string path_;
+};
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+// Runs the inhand binary with `args` (a shell-quoted string).
+CommandResult RunInhand(const std::string& args);
+
+// The same seeded generator everywhere: failures reproduce.
+inline std::mt19937& Rng() {
+  static std::mt19937 rng(20180412u);
+  return rng;
+}
+
+}  // namespace inhand::test
