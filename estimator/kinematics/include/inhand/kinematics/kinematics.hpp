@@ -16,6 +16,7 @@ class KinematicsData {
   void Update(const HandModel& model, const Eigen::Ref<const Eigen::VectorXd>& q);
 
   const Transform& T_PL(int link) const { return T_PL_[link]; }
+  const std::vector<Transform>& link_poses() const { return T_PL_; }
   // Joint axis (unit) and a point on it, in P, of the last Update().
   const Vec3& axis_P(int joint) const { return axis_P_[joint]; }
   const Vec3& origin_P(int joint) const { return origin_P_[joint]; }
