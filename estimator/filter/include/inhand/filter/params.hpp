@@ -1,0 +1,42 @@
+#pragma once
+// The filter's parameters, with units and defaults. Validate() names the field, its value and
+// the constraint; JSON round-trips every field (replay --params, echoed into outputs).
+#include <string>
+
+namespace inhand {
+
+struct FilterParams {
+  // --- contacts (estimator-math.md, kinematic update)
+  double contact_sigma = 0.001;               // [m] σ of the zero-distance constraint, per axis
+  bool contact_normal_only = false;           // false: the paper's 3-D constraint; true: only
+                                              // along the contact normal (allows sliding)
+  int contact_iterations = 1;                 // 1: one update per step (paper); >1: re-run GJK
+                                              // and update again (iterated EKF)
+  double contact_gate_chi2 = 0.0;             // Mahalanobis gate per contact; 0 disables
+  double prediction_contact_distance = 0.001; // [m] pairs this close (or penetrating) move the
+                                              // object with the fingers in Predict
+  // --- torque contacts (paper Sec. III-B)
+  double torque_candidate_distance = 0.015;   // [m] closest pairs within this distance are candidates
+  double friction_cone_deg = 45.0;            // [deg] half-angle around the inward normal
+  double force_min = 2.0;                     // [N] smaller estimated forces are ignored
+  double torque_damping = 1e-6;               // [m²] damping of (J_cᵀ)⁺
+  // --- prediction
+  double twist_damping = 1e-8;                // damping of the grasp-map pseudo-inverse
+  double process_position = 0.002;            // [m/√s] random walk of the object position
+  double process_orientation = 0.02;          // [rad/√s] random walk of the object orientation
+  double process_bias = 0.0;                  // [rad/√s] random walk of the joint biases
+  double motion_position = 0.2;               // σ added per metre of predicted translation [1]
+  double motion_orientation = 0.2;            // σ added per radian of predicted rotation [1]
+  // --- visual features (paper Sec. III-C)
+  double pixel_sigma = 2.0;                   // [px] σ of a feature's pixel
+  double visual_gate_chi2 = 9.21;             // χ²₂ at 99 %
+
+  // Throws InputError("SOURCE: parameter 'NAME' is V, expected ...").
+  void Validate(const std::string& source = "filter parameters") const;
+};
+
+std::string FilterParamsToJson(const FilterParams& params);
+// Unknown fields are errors (a typo must not silently keep a default). Validates.
+FilterParams FilterParamsFromJson(const std::string& json_text, const std::string& source);
+
+}  // namespace inhand

@@ -1,0 +1,392 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+
+#include "alloc_counter.hpp"
+#include "inhand/contacts/bullet_contact_query.hpp"
+#include "inhand/core/error.hpp"
+#include "inhand/filter/filter.hpp"
+#include "inhand/io/object_loader.hpp"
+#include "inhand/io/urdf_loader.hpp"
+#include "test_support.hpp"
+
+namespace inhand {
+namespace {
+
+// One finger of two capsule links along +y, flexing about x (towards +z).
+constexpr const char* kFinger = R"(<robot name="finger">
+  <link name="palm"/>
+  <link name="l1"><collision><origin xyz="0 0.025 0" rpy="-1.5707963267948966 0 0"/>
+    <geometry><cylinder radius="0.01" length="0.05"/></geometry></collision>
+    <collision><origin xyz="0 0 0"/><geometry><sphere radius="0.01"/></geometry></collision>
+    <collision><origin xyz="0 0.05 0"/><geometry><sphere radius="0.01"/></geometry></collision></link>
+  <link name="l2"><collision><origin xyz="0 0.02 0" rpy="-1.5707963267948966 0 0"/>
+    <geometry><cylinder radius="0.01" length="0.04"/></geometry></collision>
+    <collision><origin xyz="0 0 0"/><geometry><sphere radius="0.01"/></geometry></collision>
+    <collision><origin xyz="0 0.04 0"/><geometry><sphere radius="0.01"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="palm"/><child link="l1"/><axis xyz="1 0 0"/>
+    <limit lower="-1" upper="2" effort="2" velocity="3"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0.05 0"/>
+    <axis xyz="1 0 0"/><limit lower="-1" upper="2" effort="2" velocity="3"/></joint>
+</robot>)";
+
+ObjectModel Ball(double radius) {
+  ObjectModel o;
+  o.name = "ball";
+  o.pieces.push_back(ConvexPiece::Sphere(radius, Transform::Identity()));
+  o.mass = 0.1;
+  return o;
+}
+
+Transform At(const Vec3& p) { return MakeTransform(p, Mat3::Identity()); }
+
+struct FingerScene {
+  HandModel hand = ParseHandModel(kFinger, ".", "finger.urdf");
+  ObjectModel ball = Ball(0.02);
+  BulletContactQuery query{hand, ball};
+  int l2 = hand.LinkIndex("l2");
+  Eigen::Vector2d q0 = Eigen::Vector2d::Zero();
+
+  // τ = J_cᵀ λ for a force λ applied by link l2 at c_f (palm frame).
+  Eigen::Vector2d Torque(const Eigen::Vector2d& q, const Vec3& c_f, const Vec3& force) const {
+    KinematicsData kin(hand);
+    kin.Update(hand, q);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> J(3, 2);
+    PointJacobian(hand, kin, l2, c_f, J);
+    return J.transpose() * force;
+  }
+  double Distance(const Eigen::Vector2d& q, const Transform& T_PO) {
+    KinematicsData kin(hand);
+    kin.Update(hand, q);
+    std::vector<ContactPair> pairs;
+    query.Query(kin.link_poses(), T_PO, 1.0, pairs);
+    for (const ContactPair& p : pairs)
+      if (p.link == l2) return p.distance;
+    return 1.0;
+  }
+};
+
+TEST(Filter, PenetratingObjectIsPushedOutAlongTheNormal) {
+  FingerScene s;
+  FilterParams params;
+  Filter filter(s.hand, s.query, params, false);
+  // The ball's centre 25 mm above the distal link's axis: 5 mm penetration, normal +z.
+  const Transform T0 = At(Vec3(0, 0.07, 0.025));
+  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  filter.Predict(s.q0, 0.001);
+  filter.UpdateContacts(Eigen::Vector2d::Zero());
+  ASSERT_FALSE(filter.trace().contacts.empty());
+  EXPECT_EQ(filter.trace().contacts[0].kind, ContactKind::kKinematic);
+  const Vec3 moved = filter.position() - T0.translation();
+  EXPECT_NEAR(moved.norm(), 0.005, 1e-4);
+  EXPECT_GT(moved.normalized().dot(Vec3::UnitZ()), std::cos(1.0 * M_PI / 180));
+  EXPECT_GT(s.Distance(s.q0, filter.T_PO()), -1e-4);
+  EXPECT_LT(filter.biases().norm(), 1e-6);  // the finger was held fixed
+}
+
+TEST(Filter, TorqueConfirmedContactPullsTheObjectIntoTouch) {
+  FingerScene s;
+  Filter filter(s.hand, s.query, FilterParams(), true);
+  // 3 mm above the distal link's far end, out of the proximal link's candidate range.
+  const Transform T0 = At(Vec3(0, 0.085, 0.033));
+  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  ASSERT_NEAR(s.Distance(s.q0, T0), 0.003, 1e-9);
+  const Eigen::Vector2d tau = s.Torque(s.q0, Vec3(0, 0.085, 0.01), Vec3(0, 0, 5.0));
+  filter.Predict(s.q0, 0.001);
+  filter.UpdateContacts(tau);
+  ASSERT_EQ(filter.trace().contacts.size(), 1u);
+  const auto& c = filter.trace().contacts[0];
+  EXPECT_EQ(c.kind, ContactKind::kTorque);
+  EXPECT_NEAR(c.force_P.z(), 5.0, 0.05);  // λ̄ recovers the applied force
+  EXPECT_NEAR(s.Distance(s.q0, filter.T_PO()), 0.0, 1e-4);
+  EXPECT_LT(filter.position().z(), T0.translation().z() - 0.0028);
+}
+
+TEST(Filter, ForcesOutsideTheConeOrBelowThresholdAreRejected) {
+  FingerScene s;
+  const Transform T0 = At(Vec3(0, 0.085, 0.033));
+  const Vec3 c_f(0, 0.085, 0.01);
+  const std::vector<std::pair<Vec3, ContactKind>> cases = {
+      {Vec3(0, 0, 5.0), ContactKind::kTorque},
+      {Vec3(0, 0, 1.0), ContactKind::kRejectedForce},                      // below 2 N
+      // (A planar finger senses no force along x: tangential forces lie along y here.)
+      {Vec3(0, 4.0, 3.5), ContactKind::kRejectedCone},                     // 48.8° off the normal
+      {Vec3(0, 3.0, 4.0), ContactKind::kTorque},                           // 36.9°: inside
+      {Vec3(0, 0, -5.0), ContactKind::kRejectedCone}};                     // pulling, not pushing
+  for (const auto& [force, kind] : cases) {
+    Filter filter(s.hand, s.query, FilterParams(), true);
+    filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+    filter.Predict(s.q0, 0.001);
+    filter.UpdateContacts(s.Torque(s.q0, c_f, force));
+    ASSERT_EQ(filter.trace().contacts.size(), 1u);
+    EXPECT_EQ(filter.trace().contacts[0].kind, kind) << force.transpose();
+    if (kind != ContactKind::kTorque) {
+      EXPECT_LT((filter.position() - T0.translation()).norm(), 1e-12);
+    }
+  }
+}
+
+TEST(Filter, JointBiasConvergesWhenAContactConstrainsIt) {
+  FingerScene s;
+  const double bias = 2.0 * M_PI / 180;  // the real j2 is 2° more flexed than measured
+  const Eigen::Vector2d q_true(0.0, bias);
+  // Put the ball in touch with the true distal link, 20 mm along it.
+  KinematicsData kin(s.hand);
+  kin.Update(s.hand, q_true);
+  const Transform& T_l2 = kin.T_PL(s.l2);
+  const Vec3 n = T_l2.linear() * Vec3::UnitZ();
+  const Vec3 c_f = T_l2 * Vec3(0, 0.02, 0.01);
+  const Transform T_PO = At(c_f + 0.02 * n);
+  ASSERT_NEAR(s.Distance(q_true, T_PO), 0.0, 1e-9);
+  const Eigen::Vector2d tau = s.Torque(q_true, c_f, 5.0 * n);
+
+  Filter filter(s.hand, s.query, FilterParams(), true);
+  // The object pose is known; j1 is accurate, j2's bias is uncertain (5°).
+  filter.Reset(T_PO, s.q0, 1e-6, 1e-6, Eigen::Vector2d(1e-9, 5.0 * M_PI / 180));
+  const double sigma0 = std::sqrt(filter.covariance()(7, 7));
+  // The same constraint every step: σ(b2) shrinks like 1/√k and the estimate closes the gap.
+  for (int k = 0; k < 100; ++k) {
+    filter.Predict(s.q0, 0.001);
+    filter.UpdateContacts(tau);
+  }
+  EXPECT_NEAR(filter.biases()[1], bias, 0.2 * M_PI / 180);
+  EXPECT_NEAR(filter.biases()[0], 0.0, 1e-6);
+  EXPECT_LT(std::sqrt(filter.covariance()(7, 7)), 0.2 * sigma0);
+  EXPECT_LT((filter.position() - T_PO.translation()).norm(), 5e-5);
+}
+
+Eigen::VectorXd Clamp(const HandModel& hand, Eigen::VectorXd q) {
+  for (int i = 0; i < hand.num_q(); ++i) {
+    const Joint& j = hand.joints[hand.q_joints[i]];
+    q[i] = std::clamp(q[i], j.lower, j.upper);
+  }
+  return q;
+}
+
+// The project's hand closed around the ketchup bottle (fingers flexed to touch it roughly).
+struct GraspScene {
+  HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  ObjectModel object = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  BulletContactQuery query{hand, object};
+  Transform T_PO = MakeTransform(Vec3(0.0, 0.06, 0.045), ExpSO3(Vec3(0, M_PI / 2, 0)) * ExpSO3(Vec3(0, 0, 0.3)));
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(16, 0.6);
+};
+
+TEST(Filter, CovarianceStaysSymmetricPositiveDefiniteOver10000Steps) {
+  GraspScene s;
+  FilterParams params;
+  params.contact_iterations = 2;
+  Filter filter(s.hand, s.query, params, true);
+  filter.Reset(s.T_PO, s.q, 0.02, 0.087, 0.087);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  Eigen::VectorXd q = s.q;
+  int with_contacts = 0;
+  for (int k = 0; k < 10000; ++k) {
+    for (int j = 0; j < 16; ++j) q[j] += 0.002 * noise(test::Rng()) + 0.0005 * std::sin(0.01 * k + j);
+    q = Clamp(s.hand, q);
+    Eigen::VectorXd tau(16);
+    for (int j = 0; j < 16; ++j) tau[j] = 0.3 * noise(test::Rng());
+    filter.Predict(q, 0.001);
+    filter.UpdateContacts(tau);
+    with_contacts += filter.trace().num_constraints > 0;
+    if (k % 500 == 0 || k == 9999) {
+      const Eigen::MatrixXd& P = filter.covariance();
+      ASSERT_TRUE(P.allFinite()) << k;
+      ASSERT_EQ((P - P.transpose()).cwiseAbs().maxCoeff(), 0.0) << k;
+      Eigen::LLT<Eigen::MatrixXd> llt(P);
+      ASSERT_EQ(llt.info(), Eigen::Success) << "not positive definite at step " << k;
+      ASSERT_TRUE(filter.position().allFinite());
+      ASSERT_LT((filter.rotation() * filter.rotation().transpose() - Mat3::Identity()).norm(), 1e-12);
+    }
+  }
+  EXPECT_GT(with_contacts, 1000);  // the run exercised the updates
+}
+
+TEST(Filter, StepAllocatesNothingAfterWarmUp) {
+  GraspScene s;
+  FilterParams params;
+  params.contact_iterations = 3;
+  Filter filter(s.hand, s.query, params, true);
+  filter.Reset(s.T_PO, s.q, 0.02, 0.087, 0.087);
+  Eigen::VectorXd q = s.q, tau = Eigen::VectorXd::Constant(16, 0.5);
+  for (int k = 0; k < 20; ++k) {
+    q.array() += 1e-4;
+    filter.Predict(q, 0.001);
+    filter.UpdateContacts(tau);
+  }
+  const long before = test::AllocationCount();
+  int constraints = 0;
+  for (int k = 0; k < 100; ++k) {
+    q.array() += (k % 2 ? -1e-4 : 1e-4);
+    filter.Predict(q, 0.001);
+    filter.UpdateContacts(tau);
+    constraints += filter.trace().num_constraints;
+  }
+  EXPECT_EQ(test::AllocationCount() - before, 0);
+  EXPECT_GT(constraints, 0);
+}
+
+TEST(Filter, PredictionMovesAGraspedObjectWithTheFingers) {
+  // The finger touches the ball and flexes: with one hard contact the minimum-norm twist is a
+  // pure translation, so the ball follows the contact point.
+  FingerScene s;
+  Filter filter(s.hand, s.query, FilterParams(), false);
+  const Transform T0 = At(Vec3(0, 0.07, 0.0295));  // 0.5 mm penetration: an active contact
+  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  filter.Predict(s.q0, 0.001);
+  filter.UpdateContacts(Eigen::Vector2d::Zero());
+  const Vec3 before = filter.position();
+  KinematicsData kin(s.hand);
+  kin.Update(s.hand, s.q0);
+  const Vec3 c_L = kin.T_PL(s.l2).inverse() * filter.trace().contacts.at(0).c_f_P;
+  const Eigen::Vector2d q1(0.0, 0.01);
+  filter.Predict(q1, 0.001);
+  kin.Update(s.hand, q1);
+  const Vec3 c_moved = kin.T_PL(s.l2) * c_L;
+  EXPECT_EQ(filter.trace().prediction_contacts, 1);
+  const Vec3 expected = c_moved - [&] {
+    KinematicsData k0(s.hand);
+    k0.Update(s.hand, s.q0);
+    return Vec3(k0.T_PL(s.l2) * c_L);
+  }();
+  // First order in Δq: the point's second-order motion (0.02 m · 0.01² / 2) is left out.
+  EXPECT_LT((filter.position() - before - expected).norm(), 3e-6);
+  EXPECT_GT(expected.norm(), 1e-4);
+}
+
+// --- Jacobians against finite differences -------------------------------------------------
+
+TEST(FilterJacobians, GraspMapBlockIsTheObjectPointVelocity) {
+  const Vec3 p(0.01, 0.05, 0.03), c(0.03, 0.02, 0.06);
+  Vec6 nu;
+  nu << 0.1, -0.2, 0.05, 0.7, -0.3, 1.1;
+  const double h = 1e-7;
+  const auto point = [&](double t) { return Vec3(p + nu.head<3>() * t + ExpSO3(nu.tail<3>() * t) * (c - p)); };
+  const Vec3 fd = (point(h) - point(-h)) / (2 * h);
+  EXPECT_LT((GraspMapBlock(c, p) * nu - fd).norm(), 1e-8);
+}
+
+TEST(FilterJacobians, TwistFromContactsIncludingDegenerateCases) {
+  Vec6 nu;
+  nu << 0.02, -0.01, 0.03, 0.4, 0.2, -0.5;
+  const Vec3 p(0.0, 0.05, 0.04);
+  const auto velocity = [&](const Vec3& c) { return Vec3(GraspMapBlock(c, p) * nu); };
+  // Three non-collinear contacts: the twist is determined and recovered.
+  TwistSolver full;
+  for (const Vec3& c : {Vec3(0.03, 0.05, 0.04), Vec3(-0.03, 0.06, 0.04), Vec3(0.0, 0.05, 0.08)})
+    full.Add(GraspMapBlock(c, p), velocity(c));
+  EXPECT_LT((full.Solve(1e-12) - nu).norm(), 1e-6);
+  // One contact, and collinear contacts: under-determined; the solver returns the minimum-norm
+  // twist that reproduces the contact velocities, as the pseudo-inverse does.
+  for (const std::vector<Vec3>& cs : {std::vector<Vec3>{Vec3(0.03, 0.05, 0.04)},
+                                      std::vector<Vec3>{Vec3(0.03, 0.05, 0.04), Vec3(0.06, 0.05, 0.04), Vec3(-0.02, 0.05, 0.04)}}) {
+    TwistSolver solver;
+    Eigen::MatrixXd A(3 * cs.size(), 6);
+    Eigen::VectorXd b(3 * cs.size());
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+      solver.Add(GraspMapBlock(cs[i], p), velocity(cs[i]));
+      A.block<3, 6>(3 * i, 0) = GraspMapBlock(cs[i], p);
+      b.segment<3>(3 * i) = velocity(cs[i]);
+    }
+    const Vec6 got = solver.Solve(1e-12);
+    const Vec6 pinv = A.completeOrthogonalDecomposition().solve(b);
+    EXPECT_LT((A * got - b).norm(), 1e-7);
+    EXPECT_LT((got - pinv).norm(), 1e-5) << got.transpose() << "\n" << pinv.transpose();
+  }
+}
+
+TEST(FilterJacobians, ContactMeasurementJacobianMatchesFiniteDifferences) {
+  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  const int m = hand.num_q(), n = 6 + m;
+  const int link = hand.LinkIndex("index_distal");
+  const Eigen::VectorXd q = Eigen::VectorXd::Constant(m, 0.3);
+  const Vec3 x_f(0.002, 0.015, 0.009);  // fixed on the link
+  const Vec3 x_o(0.01, -0.02, 0.05);     // fixed on the object
+  for (const Mat3& R : {Mat3(Mat3::Identity()), ExpSO3(Vec3(0.3, -1.1, 0.4)), ExpSO3(Vec3(M_PI, 0, 0)),
+                        ExpSO3(M_PI * Vec3(1, 1, 0).normalized())}) {
+    const Vec3 p(0.01, 0.07, 0.03);
+    KinematicsData kin(hand);
+    const auto h = [&](const Eigen::VectorXd& d) {
+      kin.Update(hand, q + d.tail(m));
+      const Vec3 c_f = kin.T_PL(link) * x_f;
+      const Vec3 c_o = p + d.head<3>() + ExpSO3(d.segment<3>(3)) * R * x_o;
+      return Vec3(c_f - c_o);
+    };
+    kin.Update(hand, q);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> J(3, m), H(3, n);
+    PointJacobian(hand, kin, link, kin.T_PL(link) * x_f, J);
+    ContactMeasurementJacobian(Vec3(p + R * x_o), p, J, H);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> N(3, n);
+    for (int i = 0; i < n; ++i) {
+      Eigen::VectorXd a = Eigen::VectorXd::Zero(n), b = a;
+      a[i] = 1e-6;
+      b[i] = -1e-6;
+      N.col(i) = (h(a) - h(b)) / 2e-6;
+    }
+    EXPECT_LT((H - N).cwiseAbs().maxCoeff(), 1e-7) << "R=\n" << R << "\nH=\n" << H << "\nN=\n" << N;
+  }
+}
+
+TEST(FilterJacobians, VisualJacobianMatchesFiniteDifferences) {
+  Intrinsics K;
+  K.fx = 600;
+  K.fy = 590;
+  K.cx = 320;
+  K.cy = 240;
+  const Vec3 p(0.0, 0.06, 0.04);
+  // A camera 0.4 m away looking at the object (z towards it, y roughly down).
+  const Vec3 eye(0.05, -0.3, 0.25);
+  const Vec3 z = (p - eye).normalized();
+  const Vec3 x = z.cross(Vec3(0, 0, -1)).normalized();
+  Mat3 Rc;
+  Rc << x, z.cross(x), z;
+  const Transform T_PC = MakeTransform(eye, Rc);
+  for (const Mat3& R : {Mat3(Mat3::Identity()), ExpSO3(Vec3(M_PI, 0, 0)), ExpSO3(Vec3(0.2, 0.5, -0.7))}) {
+    for (const Vec3& x_o : {Vec3(0.0, 0.0, 0.0), Vec3(0.03, -0.02, 0.1), Vec3(-0.2, 0.1, 0.05)}) {
+      const auto pix = [&](const Vec6& d) {
+        const Vec3 X = p + d.head<3>() + ExpSO3(d.tail<3>()) * R * x_o;
+        return K.Project(T_PC.inverse() * X);
+      };
+      const Vec3 X = p + R * x_o;
+      ASSERT_GT((T_PC.inverse() * X).z(), 0.0);
+      const auto H = VisualMeasurementJacobian(X, p, T_PC, K);
+      Eigen::Matrix<double, 2, 6> N;
+      for (int i = 0; i < 6; ++i) {
+        Vec6 a = Vec6::Zero(), b = Vec6::Zero();
+        a[i] = 1e-7;
+        b[i] = -1e-7;
+        N.col(i) = (pix(a) - pix(b)) / 2e-7;
+      }
+      EXPECT_LT((H - N).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, H.cwiseAbs().maxCoeff())) << H << "\n" << N;
+    }
+  }
+}
+
+TEST(FilterParams, ValidationAndJsonRoundTrip) {
+  FilterParams p;
+  p.contact_iterations = 3;
+  p.contact_normal_only = true;
+  p.force_min = 4.5;
+  const FilterParams q = FilterParamsFromJson(FilterParamsToJson(p), "p.json");
+  EXPECT_EQ(q.contact_iterations, 3);
+  EXPECT_TRUE(q.contact_normal_only);
+  EXPECT_EQ(q.force_min, 4.5);
+  const auto expect_error = [](const std::string& json, const std::string& fragment) {
+    try {
+      FilterParamsFromJson(json, "p.json");
+      ADD_FAILURE() << json;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  expect_error("{\"contact_sigma\": 0}", "'contact_sigma' is 0");
+  expect_error("{\"friction_cone_deg\": 120}", "'friction_cone_deg'");
+  expect_error("{\"contact_iterations\": 1.5}", "integer");
+  expect_error("{\"force_mni\": 3}", "unknown parameter 'force_mni'");
+  expect_error("{\"force_min\": \"3\"}", "must be a number");
+  expect_error("[1, 2]", "expected a JSON object");
+}
+
+}  // namespace
+}  // namespace inhand
