@@ -9,13 +9,11 @@
 #include <set>
 #include <sstream>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "inhand/core/error.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
+#include "inhand/renderer/image_io.hpp"
 
 namespace fs = std::filesystem;
 
@@ -294,17 +292,13 @@ Session Session::Load(const std::string& dir) {
 Image8 Session::LoadImage(int i) const {
   INHAND_CHECK(i >= 0 && i < static_cast<int>(frames_.size()), "camera frame index out of range");
   const std::string path = Resolve(frames_[static_cast<std::size_t>(i)].image);
-  const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
-  if (bgr.empty()) throw InputError(path + ": unreadable image");
+  Image8 image = ReadImage(path);
   const Intrinsics& K = *info_.camera;
-  if (bgr.cols != K.width || bgr.rows != K.height)
-    throw InputError(path + ": image is " + std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows) +
+  if (image.width != K.width || image.height != K.height)
+    throw InputError(path + ": image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                      ", session.json's camera says " + std::to_string(K.width) + "x" +
                      std::to_string(K.height));
-  Image8 out(bgr.cols, bgr.rows, 3);
-  cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  return out;
+  return image;
 }
 
 Transform Session::GroundTruthAt(double t) const {
@@ -413,11 +407,7 @@ void SessionWriter::AddCameraFrame(double t, const Image8& image, const Transfor
                "camera frame must be RGB of the intrinsics' size");
   char name[64];
   std::snprintf(name, sizeof(name), "images/frame_%06d.png", num_frames_++);
-  cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<std::uint8_t*>(image.data.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  const std::string path = (fs::path(tmp_) / name).string();
-  if (!cv::imwrite(path, bgr)) throw InputError(path + ": cannot write image");
+  WriteImage((fs::path(tmp_) / name).string(), image);
   camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
 }
 

@@ -149,12 +149,14 @@ TEST(Kinematics, ProjectHandClosesTowardsThePalmSide) {
   const Vec3 index_closed = data.T_PL(hand.LinkIndex("index_tip")).translation();
   EXPECT_GT(index_closed.z(), index_open.z() + 0.04);
   EXPECT_LT(index_closed.y(), index_open.y() - 0.03);
-  q[hand.joints[hand.JointIndex("thumb_abduction")].q_index] = 0.8;
-  q[hand.joints[hand.JointIndex("thumb_flex1")].q_index] = 0.5;
+  q[hand.joints[hand.JointIndex("thumb_abduction")].q_index] = 0.3;
+  for (int k = 1; k <= 3; ++k) q[hand.joints[hand.JointIndex("thumb_flex" + std::to_string(k))].q_index] = 0.8;
   data.Update(hand, q);
   const Vec3 thumb = data.T_PL(hand.LinkIndex("thumb_tip")).translation();
-  EXPECT_GT(thumb.z(), 0.02);
-  EXPECT_GT(thumb.y(), 0.02);
+  EXPECT_GT(thumb.z(), 0.02);                   // in front of the palm
+  EXPECT_GT(thumb.y(), 0.03);                   // towards the fingers, not the wrist
+  EXPECT_LT(thumb.y(), index_open.y());
+  EXPECT_LT(thumb.x(), 0.036 + 0.01);           // curled back over the palm
 }
 
 TEST(Kinematics, SharedHandsJacobians) {

@@ -73,6 +73,8 @@ std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scal
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // Smooth normals across gentle bends only: box edges and caps stay sharp.
+  importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, 60.0f);
   // Keep the file's meshes apart: the grouping below decides what to merge.
   importer.SetPropertyBool(AI_CONFIG_PP_PTV_KEEP_HIERARCHY, true);
   const aiScene* scene = importer.ReadFile(

@@ -1,0 +1,39 @@
+#pragma once
+// H.264 MP4 video through OpenCV's FFmpeg backend (fourcc avc1), plays everywhere.
+#include <memory>
+#include <string>
+
+#include "inhand/core/image.hpp"
+
+namespace inhand {
+
+class VideoWriter {
+ public:
+  // Throws InputError when the file cannot be opened for H.264 encoding.
+  VideoWriter(const std::string& path, double fps, int width, int height);
+  ~VideoWriter();
+  VideoWriter(const VideoWriter&) = delete;
+  VideoWriter& operator=(const VideoWriter&) = delete;
+  // Frames must have the size given at construction (RGB).
+  void Write(const Image8& frame);
+  void Close();
+  int frames() const { return frames_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  int frames_ = 0;
+};
+
+// Frames and size of a video file (OpenCV), for tests and checks; frames = -1 when unreadable.
+struct VideoInfo {
+  int frames = -1;
+  int width = 0, height = 0;
+  double fps = 0.0;
+  std::string codec;  // fourcc as text, e.g. "h264"
+};
+VideoInfo ProbeVideo(const std::string& path);
+// Decodes frame `index` (RGB); empty image when unavailable.
+Image8 ReadVideoFrame(const std::string& path, int index);
+
+}  // namespace inhand

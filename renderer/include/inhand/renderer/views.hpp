@@ -1,0 +1,42 @@
+#pragma once
+// Building scenes from hand and object models: meshes uploaded once, items placed per frame.
+#include <vector>
+
+#include "inhand/core/hand_model.hpp"
+#include "inhand/core/object_model.hpp"
+#include "inhand/renderer/renderer.hpp"
+
+namespace inhand {
+
+// Label image values: 0 background, kObjectLabel the object, kHandLabelBase + link index the
+// hand's links, kExtraLabelBase + i anything else a caller adds.
+constexpr std::uint16_t kObjectLabel = 1;
+constexpr std::uint16_t kHandLabelBase = 100;
+constexpr std::uint16_t kExtraLabelBase = 1000;
+
+struct HandMeshes {
+  std::vector<std::vector<int>> link_meshes;  // per link, renderer mesh ids
+};
+HandMeshes UploadHand(Renderer& renderer, const HandModel& hand);
+std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object);
+
+void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform>& T_PL,
+             double opacity = 1.0);
+struct ObjectStyle {
+  std::optional<Eigen::Vector4d> rgba;  // flat colour instead of the materials
+  double opacity = 1.0;
+  bool unlit = false;
+  std::uint16_t label = kObjectLabel;
+};
+void AddObject(Scene& scene, const std::vector<int>& meshes, const Transform& T_PO,
+               const ObjectStyle& style = {});
+
+// Camera pose (OpenCV axes: z towards the target, y down on screen) looking from eye at
+// target, with `up` pointing up on screen.
+Transform LookAt(const Vec3& eye, const Vec3& target, const Vec3& up);
+// On a sphere around `center`: azimuth about `up`, elevation above the plane normal to it.
+Transform OrbitCamera(const Vec3& center, double distance, double azimuth, double elevation,
+                      const Vec3& up = Vec3::UnitZ());
+Intrinsics IntrinsicsFromFov(int width, int height, double vertical_fov_deg);
+
+}  // namespace inhand

@@ -1,0 +1,227 @@
+#include "inhand/renderer/overlay.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "inhand/core/error.hpp"
+#include "inhand/renderer/views.hpp"
+
+namespace inhand {
+
+namespace {
+
+cv::Scalar Colour(const Rgb& c) { return cv::Scalar(c.r, c.g, c.b); }  // the Mat holds RGB
+
+// Projects a palm-frame point; false when behind the camera.
+bool ProjectP(const Transform& T_CP, const Intrinsics& K, const Vec3& X_P, Vec2& uv) {
+  const Vec3 X_C = T_CP * X_P;
+  if (X_C.z() <= 1e-4) return false;
+  uv = K.Project(X_C);
+  return true;
+}
+
+// cv drawing takes fixed-point coordinates with `shift` fractional bits: sub-pixel accuracy.
+constexpr int kShift = 4;
+cv::Point Fx(const Vec2& p) {
+  return cv::Point(static_cast<int>(std::lround((p.x()) * (1 << kShift))),
+                   static_cast<int>(std::lround((p.y()) * (1 << kShift))));
+}
+
+void Line(cv::Mat& img, const Vec2& a, const Vec2& b, const cv::Scalar& c, int thickness) {
+  cv::line(img, Fx(a), Fx(b), c, thickness, cv::LINE_AA, kShift);
+}
+
+void DrawDashedContours(cv::Mat& img, const std::vector<std::vector<cv::Point>>& contours, const cv::Scalar& c) {
+  constexpr int kOn = 7, kPeriod = 12;
+  for (const auto& contour : contours) {
+    for (std::size_t i = 0; i < contour.size(); ++i)
+      if (static_cast<int>(i) % kPeriod < kOn) {
+        const cv::Point& a = contour[i];
+        const cv::Point& b = contour[(i + 1) % contour.size()];
+        cv::line(img, a, b, c, 2, cv::LINE_AA);
+      }
+  }
+}
+
+}  // namespace
+
+OverlayPainter::OverlayPainter(Renderer& renderer, std::vector<int> object_meshes)
+    : renderer_(renderer), object_meshes_(std::move(object_meshes)) {}
+
+std::vector<std::uint8_t> OverlayPainter::Silhouette(const Transform& T_PO, const Transform& T_PC, const Intrinsics& K) {
+  Scene scene;
+  scene.K = K;
+  scene.T_PC = T_PC;
+  ObjectStyle style;
+  style.rgba = Eigen::Vector4d(1, 1, 1, 1);  // opaque even for transparent bodies
+  style.unlit = true;
+  AddObject(scene, object_meshes_, T_PO, style);
+  renderer_.Render(scene, scratch_, true);
+  std::vector<std::uint8_t> mask(scratch_.label.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = scratch_.label[i] == kObjectLabel;
+  return mask;
+}
+
+Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& layers) {
+  const Intrinsics& K = frame.K;
+  INHAND_CHECK(frame.camera.width == K.width && frame.camera.height == K.height && frame.camera.channels == 3,
+               "overlay background must be RGB of the intrinsics' size");
+  Image8 out = frame.camera;
+  cv::Mat img(out.height, out.width, CV_8UC3, out.data.data());
+  const Transform T_CP = frame.T_PC.inverse();
+
+  // Silhouettes and outlines first, then the geometric markers on top.
+  for (const OverlayEstimate& e : frame.estimates) {
+    if (!layers.silhouette && !layers.outline) break;
+    const std::vector<std::uint8_t> mask_data = Silhouette(e.T_PO, frame.T_PC, K);
+    cv::Mat mask(K.height, K.width, CV_8UC1, const_cast<std::uint8_t*>(mask_data.data()));
+    if (layers.silhouette && !e.dashed) {
+      cv::Mat tint(img.size(), CV_8UC3, Colour(e.colour));
+      cv::Mat blended;
+      cv::addWeighted(img, 0.72, tint, 0.28, 0.0, blended);
+      blended.copyTo(img, mask);
+    }
+    if (layers.outline) {
+      std::vector<std::vector<cv::Point>> contours;
+      cv::Mat m = mask.clone();
+      cv::findContours(m, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+      if (e.dashed) DrawDashedContours(img, contours, Colour(e.colour));
+      else cv::drawContours(img, contours, -1, Colour(e.colour), 2, cv::LINE_AA);
+    }
+  }
+
+  for (const OverlayEstimate& e : frame.estimates) {
+    const cv::Scalar colour = Colour(e.colour);
+    Vec2 o;
+    const bool origin_visible = ProjectP(T_CP, K, e.T_PO.translation(), o);
+    if (layers.uncertainty && origin_visible && e.position_covariance.norm() > 0.0) {
+      // 3σ ellipse of the position, projected to first order.
+      const Vec3 X_C = T_CP * e.T_PO.translation();
+      const Eigen::Matrix<double, 2, 3> J = K.ProjectJacobian(X_C) * T_CP.linear();
+      const Eigen::Matrix2d S = J * e.position_covariance * J.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
+      const Eigen::Vector2d ev = eig.eigenvalues().cwiseMax(0.0);
+      const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+      const double angle = std::atan2(axis.y(), axis.x()) * 180.0 / M_PI;
+      const cv::Size axes(static_cast<int>(std::lround(3.0 * std::sqrt(ev[1]) * (1 << kShift))),
+                          static_cast<int>(std::lround(3.0 * std::sqrt(ev[0]) * (1 << kShift))));
+      cv::ellipse(img, Fx(o), axes, angle, 0, 360, colour, 1, cv::LINE_AA, kShift);
+    }
+    if (layers.axes && origin_visible) {
+      const Rgb axis_colours[3] = {{230, 30, 30}, {30, 190, 30}, {30, 60, 230}};
+      for (int a = 0; a < 3; ++a) {
+        Vec2 tip;
+        if (ProjectP(T_CP, K, e.T_PO * (frame.axes_length * Vec3::Unit(a)), tip))
+          Line(img, o, tip, Colour(axis_colours[a]), e.dashed ? 1 : 2);
+      }
+    }
+    for (const OverlayContact& c : e.contacts) {
+      Vec2 p;
+      if (!ProjectP(T_CP, K, c.c_o_P, p)) continue;
+      if (layers.cones && (c.kind == OverlayContact::Kind::kTorque || c.kind == OverlayContact::Kind::kKinematic)) {
+        // The cone's silhouette: two generators in the plane of the normal and the view ray.
+        const Vec3 view = (c.c_o_P - frame.T_PC.translation()).normalized();
+        Vec3 side = c.normal_P.cross(view);
+        if (side.norm() > 1e-6) {
+          side = side.cross(c.normal_P).normalized();
+          const double a = frame.friction_cone_deg * M_PI / 180.0, L = 0.02;
+          for (double s : {-1.0, 1.0}) {
+            Vec2 q;
+            if (ProjectP(T_CP, K, c.c_o_P + L * (std::cos(a) * c.normal_P + s * std::sin(a) * side), q))
+              Line(img, p, q, colour, 1);
+          }
+        }
+      }
+      if (layers.forces && c.force_P.norm() > 1e-9) {
+        Vec2 q;
+        if (ProjectP(T_CP, K, c.c_o_P + frame.force_scale * c.force_P, q))
+          cv::arrowedLine(img, Fx(p), Fx(q), colour, 2, cv::LINE_AA, kShift, 0.25);
+      }
+      if (layers.contacts) {
+        switch (c.kind) {
+          case OverlayContact::Kind::kKinematic:
+            cv::circle(img, Fx(p), 5 << kShift, colour, cv::FILLED, cv::LINE_AA, kShift);
+            cv::circle(img, Fx(p), 5 << kShift, cv::Scalar(255, 255, 255), 1, cv::LINE_AA, kShift);
+            break;
+          case OverlayContact::Kind::kTorque:
+            cv::circle(img, Fx(p), 6 << kShift, colour, 2, cv::LINE_AA, kShift);
+            break;
+          case OverlayContact::Kind::kRejected:
+            Line(img, p + Vec2(-4, -4), p + Vec2(4, 4), colour, 1);
+            Line(img, p + Vec2(-4, 4), p + Vec2(4, -4), colour, 1);
+            break;
+          case OverlayContact::Kind::kCandidate:
+            cv::circle(img, Fx(p), 2 << kShift, colour, cv::FILLED, cv::LINE_AA, kShift);
+            break;
+        }
+      }
+    }
+    if (layers.features) {
+      for (const OverlayFeature& f : e.features) {
+        const cv::Scalar fc = f.inlier ? colour : cv::Scalar(200, 0, 200);
+        Line(img, f.predicted, f.measured, fc, 1);
+        cv::circle(img, Fx(f.measured), 4 << kShift, fc, 1, cv::LINE_AA, kShift);
+        Line(img, f.predicted + Vec2(-3, 0), f.predicted + Vec2(3, 0), fc, 1);
+        Line(img, f.predicted + Vec2(0, -3), f.predicted + Vec2(0, 3), fc, 1);
+      }
+    }
+  }
+
+  if (layers.hud && !frame.hud.empty()) {
+    const double scale = 0.45;
+    int y = 6;
+    for (const std::string& line : frame.hud) {
+      int base = 0;
+      const cv::Size sz = cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &base);
+      cv::Mat roi = img(cv::Rect(4, y, std::min(sz.width + 8, img.cols - 4), std::min(sz.height + base + 6, img.rows - y)));
+      roi = roi * 0.35;
+      cv::putText(img, line, cv::Point(8, y + sz.height + 3), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+      y += sz.height + base + 8;
+      if (y > img.rows - 20) break;
+    }
+  }
+  // The legend: one swatch per estimate, bottom-left.
+  if (layers.hud && !frame.estimates.empty()) {
+    int x = 8;
+    const int y = img.rows - 10;
+    for (const OverlayEstimate& e : frame.estimates) {
+      int base = 0;
+      const cv::Size sz = cv::getTextSize(e.name, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &base);
+      cv::rectangle(img, cv::Rect(x - 3, y - sz.height - 5, sz.width + 26, sz.height + 10), cv::Scalar(255, 255, 255), cv::FILLED);
+      if (e.dashed) cv::line(img, cv::Point(x, y - 4), cv::Point(x + 14, y - 4), Colour(e.colour), 2);
+      else cv::rectangle(img, cv::Rect(x, y - 10, 14, 10), Colour(e.colour), cv::FILLED);
+      cv::putText(img, e.name, cv::Point(x + 18, y), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+      x += sz.width + 34;
+    }
+  }
+  return out;
+}
+
+Image8 SideBySide(const std::vector<const Image8*>& images, const std::vector<std::string>& captions) {
+  INHAND_CHECK(!images.empty(), "SideBySide needs images");
+  const int H = images[0]->height;
+  std::vector<cv::Mat> tiles;
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const Image8& im = *images[i];
+    const cv::Mat m(im.height, im.width, CV_8UC3, const_cast<std::uint8_t*>(im.data.data()));
+    cv::Mat scaled;
+    if (im.height != H) cv::resize(m, scaled, cv::Size(static_cast<int>(std::lround(im.width * double(H) / im.height)), H), 0, 0, cv::INTER_AREA);
+    else scaled = m.clone();
+    if (i < captions.size() && !captions[i].empty()) {
+      cv::rectangle(scaled, cv::Rect(0, 0, scaled.cols, 20), cv::Scalar(30, 30, 30), cv::FILLED);
+      cv::putText(scaled, captions[i], cv::Point(6, 14), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    }
+    tiles.push_back(scaled);
+  }
+  cv::Mat all;
+  cv::hconcat(tiles, all);
+  // Even sizes for H.264.
+  if (all.cols % 2) cv::copyMakeBorder(all, all, 0, 0, 0, 1, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+  if (all.rows % 2) cv::copyMakeBorder(all, all, 0, 1, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+  Image8 out(all.cols, all.rows, 3);
+  std::memcpy(out.data.data(), all.data, out.data.size());
+  return out;
+}
+
+}  // namespace inhand

@@ -1,0 +1,378 @@
+#include "inhand/renderer/renderer.hpp"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/osmesa.h>
+#include <GL/gl.h>
+#include <GL/glext.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "inhand/core/error.hpp"
+
+namespace inhand {
+
+Eigen::Matrix4d ProjectionMatrix(const Intrinsics& K, double n, double f) {
+  const double W = K.width, H = K.height;
+  Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
+  // NDC x = 2 (u + 0.5) / W - 1 and NDC y = 1 - 2 (v + 0.5) / H, with w = z (camera z forward).
+  P(0, 0) = 2.0 * K.fx / W;
+  P(0, 2) = 2.0 * (K.cx + 0.5) / W - 1.0;
+  P(1, 1) = -2.0 * K.fy / H;
+  P(1, 2) = 1.0 - 2.0 * (K.cy + 0.5) / H;
+  P(2, 2) = (f + n) / (f - n);
+  P(2, 3) = -2.0 * f * n / (f - n);
+  P(3, 2) = 1.0;
+  return P;
+}
+
+namespace {
+
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec2 a_uv;
+uniform mat4 u_model_cam;
+uniform mat4 u_proj;
+out vec3 v_pos_c;
+out vec3 v_normal_c;
+out vec2 v_uv;
+void main() {
+  vec4 pc = u_model_cam * vec4(a_pos, 1.0);
+  v_pos_c = pc.xyz;
+  v_normal_c = mat3(u_model_cam) * a_normal;
+  v_uv = a_uv;
+  gl_Position = u_proj * pc;
+}
+)";
+
+constexpr const char* kFragmentShader = R"(#version 330 core
+in vec3 v_pos_c;
+in vec3 v_normal_c;
+in vec2 v_uv;
+uniform vec4 u_color;
+uniform int u_use_texture;
+uniform sampler2D u_tex;
+uniform uint u_label;
+uniform int u_unlit;
+uniform vec3 u_light_c;
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out uint o_label;
+layout(location = 2) out float o_depth;
+void main() {
+  vec4 base = u_color;
+  if (u_use_texture != 0) base *= texture(u_tex, vec2(v_uv.x, 1.0 - v_uv.y));
+  vec3 c = base.rgb;
+  if (u_unlit == 0) {
+    vec3 n = normalize(v_normal_c);
+    vec3 view = normalize(-v_pos_c);
+    if (dot(n, view) < 0.0) n = -n;
+    float key = max(dot(n, u_light_c), 0.0);
+    float head = max(dot(n, view), 0.0);
+    vec3 h = normalize(u_light_c + view);
+    float spec = pow(max(dot(n, h), 0.0), 32.0) * 0.12;
+    c = base.rgb * (0.28 + 0.42 * key + 0.38 * head) + vec3(spec);
+  }
+  o_color = vec4(clamp(c, 0.0, 1.0), base.a);
+  o_label = u_label;
+  o_depth = v_pos_c.z;
+}
+)";
+
+GLuint Compile(GLenum type, const char* source) {
+  const GLuint s = glCreateShader(type);
+  glShaderSource(s, 1, &source, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetShaderInfoLog(s, sizeof(log), nullptr, log);
+    throw std::runtime_error(std::string("renderer: shader compilation failed: ") + log);
+  }
+  return s;
+}
+
+struct GpuMesh {
+  GLuint vao = 0, vbo = 0, ebo = 0;
+  GLsizei count = 0;
+  Eigen::Vector4d rgba;
+  GLuint texture = 0;
+  Aabb bounds;
+};
+
+}  // namespace
+
+struct Renderer::Impl {
+  OSMesaContext ctx = nullptr;
+  std::vector<std::uint8_t> default_buffer = std::vector<std::uint8_t>(16 * 16 * 4);
+  GLuint program = 0;
+  GLint u_model_cam = -1, u_proj = -1, u_color = -1, u_use_texture = -1, u_tex = -1, u_label = -1, u_unlit = -1, u_light = -1;
+  std::vector<GpuMesh> meshes;
+  std::map<std::string, GLuint> textures;
+  GLuint fbo = 0, rb_color = 0, rb_label = 0, rb_depthf = 0, rb_zbuffer = 0;
+  int fb_w = 0, fb_h = 0;
+  std::vector<std::uint8_t> rgba_buf;
+  std::vector<float> depth_buf;
+  std::vector<std::uint16_t> label_buf;
+
+  void MakeCurrent() {
+    if (!OSMesaMakeCurrent(ctx, default_buffer.data(), GL_UNSIGNED_BYTE, 16, 16))
+      throw std::runtime_error("renderer: OSMesaMakeCurrent failed");
+  }
+
+  void EnsureFramebuffer(int w, int h) {
+    if (fbo && w == fb_w && h == fb_h) return;
+    if (fbo) {
+      glDeleteFramebuffers(1, &fbo);
+      const GLuint rbs[4] = {rb_color, rb_label, rb_depthf, rb_zbuffer};
+      glDeleteRenderbuffers(4, rbs);
+    }
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    const auto make_rb = [&](GLenum format, GLenum attachment) {
+      GLuint rb;
+      glGenRenderbuffers(1, &rb);
+      glBindRenderbuffer(GL_RENDERBUFFER, rb);
+      glRenderbufferStorage(GL_RENDERBUFFER, format, w, h);
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, rb);
+      return rb;
+    };
+    rb_color = make_rb(GL_RGBA8, GL_COLOR_ATTACHMENT0);
+    rb_label = make_rb(GL_R16UI, GL_COLOR_ATTACHMENT1);
+    rb_depthf = make_rb(GL_R32F, GL_COLOR_ATTACHMENT2);
+    rb_zbuffer = make_rb(GL_DEPTH_COMPONENT24, GL_DEPTH_ATTACHMENT);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw std::runtime_error("renderer: framebuffer incomplete");
+    fb_w = w;
+    fb_h = h;
+  }
+
+  GLuint Texture(const Material& m) {
+    const std::string key = !m.texture_file.empty() ? m.texture_file
+                                                     : "blob:" + std::to_string(reinterpret_cast<std::uintptr_t>(&m)) + ":" + std::to_string(m.texture_blob.size());
+    if (auto it = textures.find(key); it != textures.end()) return it->second;
+    cv::Mat bgr = !m.texture_file.empty() ? cv::imread(m.texture_file, cv::IMREAD_COLOR)
+                                          : cv::imdecode(m.texture_blob, cv::IMREAD_COLOR);
+    if (bgr.empty()) throw InputError((m.texture_file.empty() ? std::string("embedded texture") : m.texture_file) + ": unreadable texture image");
+    cv::Mat rgb;
+    cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data);
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    textures.emplace(key, tex);
+    return tex;
+  }
+};
+
+Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
+  const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
+                         OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  impl_->ctx = OSMesaCreateContextAttribs(attribs, nullptr);
+  if (impl_->ctx == nullptr) throw std::runtime_error("renderer: cannot create an OSMesa OpenGL 3.3 core context");
+  impl_->MakeCurrent();
+  const GLuint vs = Compile(GL_VERTEX_SHADER, kVertexShader);
+  const GLuint fs = Compile(GL_FRAGMENT_SHADER, kFragmentShader);
+  Impl& r = *impl_;
+  r.program = glCreateProgram();
+  glAttachShader(r.program, vs);
+  glAttachShader(r.program, fs);
+  glLinkProgram(r.program);
+  GLint ok = 0;
+  glGetProgramiv(r.program, GL_LINK_STATUS, &ok);
+  if (!ok) throw std::runtime_error("renderer: shader program does not link");
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  r.u_model_cam = glGetUniformLocation(r.program, "u_model_cam");
+  r.u_proj = glGetUniformLocation(r.program, "u_proj");
+  r.u_color = glGetUniformLocation(r.program, "u_color");
+  r.u_use_texture = glGetUniformLocation(r.program, "u_use_texture");
+  r.u_tex = glGetUniformLocation(r.program, "u_tex");
+  r.u_label = glGetUniformLocation(r.program, "u_label");
+  r.u_unlit = glGetUniformLocation(r.program, "u_unlit");
+  r.u_light = glGetUniformLocation(r.program, "u_light_c");
+}
+
+Renderer::~Renderer() {
+  if (impl_->ctx) OSMesaDestroyContext(impl_->ctx);
+}
+
+std::string Renderer::Description() const {
+  impl_->MakeCurrent();
+  const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  return std::string("OSMesa: ") + (renderer ? renderer : "?") + ", OpenGL " + (version ? version : "?");
+}
+
+std::size_t Renderer::num_meshes() const { return impl_->meshes.size(); }
+
+int Renderer::AddMesh(const TriangleMesh& mesh) {
+  impl_->MakeCurrent();
+  GpuMesh g;
+  g.rgba = mesh.material.rgba;
+  g.bounds = mesh.Bounds();
+  std::vector<float> data;
+  data.reserve(mesh.vertices.size() * 8);
+  const bool has_normals = mesh.normals.size() == mesh.vertices.size();
+  const bool has_uv = mesh.uvs.size() == mesh.vertices.size();
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Vec3& v = mesh.vertices[i];
+    const Vec3 n = has_normals ? mesh.normals[i] : Vec3::UnitZ();
+    const Vec2 uv = has_uv ? mesh.uvs[i] : Vec2::Zero();
+    for (double x : {v.x(), v.y(), v.z(), n.x(), n.y(), n.z(), uv.x(), uv.y()}) data.push_back(static_cast<float>(x));
+  }
+  std::vector<std::uint32_t> indices;
+  indices.reserve(mesh.triangles.size() * 3);
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) indices.push_back(static_cast<std::uint32_t>(t[k]));
+  glGenVertexArrays(1, &g.vao);
+  glBindVertexArray(g.vao);
+  glGenBuffers(1, &g.vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, g.vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(), GL_STATIC_DRAW);
+  glGenBuffers(1, &g.ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(), GL_STATIC_DRAW);
+  const GLsizei stride = 8 * sizeof(float);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(3 * sizeof(float)));
+  glEnableVertexAttribArray(2);
+  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(6 * sizeof(float)));
+  glBindVertexArray(0);
+  g.count = static_cast<GLsizei>(indices.size());
+  if (mesh.material.HasTexture() && has_uv) g.texture = impl_->Texture(mesh.material);
+  impl_->meshes.push_back(g);
+  return static_cast<int>(impl_->meshes.size()) - 1;
+}
+
+void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and_labels) {
+  Impl& r = *impl_;
+  r.MakeCurrent();
+  const int W = scene.K.width, H = scene.K.height;
+  r.EnsureFramebuffer(W, H);
+  glBindFramebuffer(GL_FRAMEBUFFER, r.fbo);
+  const GLenum buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+  glDrawBuffers(3, buffers);
+  glViewport(0, 0, W, H);
+  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glColorMaski(2, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthMask(GL_TRUE);
+  const float bg[4] = {static_cast<float>(scene.background.x()), static_cast<float>(scene.background.y()),
+                       static_cast<float>(scene.background.z()), 1.0f};
+  const GLuint zero_label[4] = {0, 0, 0, 0};
+  const float zero_depth[4] = {0, 0, 0, 0};
+  glClearBufferfv(GL_COLOR, 0, bg);
+  glClearBufferuiv(GL_COLOR, 1, zero_label);
+  glClearBufferfv(GL_COLOR, 2, zero_depth);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);
+  glUseProgram(r.program);
+
+  const Eigen::Matrix4f proj = ProjectionMatrix(scene.K, scene.near, scene.far).cast<float>();
+  glUniformMatrix4fv(r.u_proj, 1, GL_FALSE, proj.data());
+  const Eigen::Vector3f light = Eigen::Vector3f(-0.35f, -0.6f, -0.7f).normalized();  // above-left of the camera
+  glUniform3f(r.u_light, light.x(), light.y(), light.z());
+  glUniform1i(r.u_tex, 0);
+  const Transform T_CP = scene.T_PC.inverse();
+
+  // Opaque first; translucent sorted back to front by their centre's depth.
+  std::vector<std::pair<double, const SceneItem*>> translucent;
+  const auto draw = [&](const SceneItem& item) {
+    const GpuMesh& g = r.meshes.at(static_cast<std::size_t>(item.mesh));
+    const Eigen::Matrix4f model_cam = (T_CP * item.T_PM).matrix().cast<float>();
+    glUniformMatrix4fv(r.u_model_cam, 1, GL_FALSE, model_cam.data());
+    Eigen::Vector4d c = item.rgba ? *item.rgba : g.rgba;
+    c[3] *= item.opacity;
+    glUniform4f(r.u_color, static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]), static_cast<float>(c[3]));
+    glUniform1i(r.u_use_texture, g.texture && !item.rgba ? 1 : 0);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, g.texture);
+    glUniform1ui(r.u_label, item.label);
+    glUniform1i(r.u_unlit, item.unlit ? 1 : 0);
+    glBindVertexArray(g.vao);
+    glDrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
+  };
+  glDisablei(GL_BLEND, 0);
+  for (const SceneItem& item : scene.items) {
+    const GpuMesh& g = r.meshes.at(static_cast<std::size_t>(item.mesh));
+    const double alpha = (item.rgba ? (*item.rgba)[3] : g.rgba[3]) * item.opacity;
+    if (alpha < 0.999) {
+      translucent.emplace_back((T_CP * item.T_PM * g.bounds.Center()).z(), &item);
+      continue;
+    }
+    draw(item);
+  }
+  if (!translucent.empty()) {
+    std::stable_sort(translucent.begin(), translucent.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    glEnablei(GL_BLEND, 0);
+    glBlendFunci(0, GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glColorMaski(2, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glDepthMask(GL_FALSE);
+    for (const auto& [depth, item] : translucent) draw(*item);
+    glDepthMask(GL_TRUE);
+    glDisablei(GL_BLEND, 0);
+  }
+  glBindVertexArray(0);
+
+  // Read back; GL rows are bottom-up.
+  out.width = W;
+  out.height = H;
+  out.colour = Image8(W, H, 3);
+  r.rgba_buf.resize(std::size_t(W) * H * 4);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glReadPixels(0, 0, W, H, GL_RGBA, GL_UNSIGNED_BYTE, r.rgba_buf.data());
+  for (int y = 0; y < H; ++y) {
+    const std::uint8_t* src = &r.rgba_buf[std::size_t(H - 1 - y) * W * 4];
+    std::uint8_t* dst = out.colour.pixel(0, y);
+    for (int x = 0; x < W; ++x) {
+      dst[3 * x] = src[4 * x];
+      dst[3 * x + 1] = src[4 * x + 1];
+      dst[3 * x + 2] = src[4 * x + 2];
+    }
+  }
+  if (with_depth_and_labels) {
+    r.depth_buf.resize(std::size_t(W) * H);
+    r.label_buf.resize(std::size_t(W) * H);
+    glReadBuffer(GL_COLOR_ATTACHMENT2);
+    glReadPixels(0, 0, W, H, GL_RED, GL_FLOAT, r.depth_buf.data());
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, r.label_buf.data());
+    out.depth.resize(std::size_t(W) * H);
+    out.label.resize(std::size_t(W) * H);
+    for (int y = 0; y < H; ++y) {
+      const std::size_t src = std::size_t(H - 1 - y) * W, dst = std::size_t(y) * W;
+      for (int x = 0; x < W; ++x) {
+        const float z = r.depth_buf[src + x];
+        out.depth[dst + x] = z > 0.0f ? z : std::numeric_limits<float>::infinity();
+        out.label[dst + x] = r.label_buf[src + x];
+      }
+    }
+  } else {
+    out.depth.clear();
+    out.label.clear();
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+}  // namespace inhand
