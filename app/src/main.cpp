@@ -14,6 +14,15 @@ int main(int argc, char** argv) {
   model_cmd->add_option("FILE", model.file, "hand URDF or object .json")->required();
   model_cmd->add_option("--package", model.packages, "resolve package://NAME as DIR (NAME=DIR)");
   model_cmd->add_flag("--json", model.json, "print JSON");
+  model_cmd->add_option("--render", model.render, "write a PNG preview (three views)");
+
+  inhand::app::CompareCommand compare;
+  auto* compare_cmd = cli.add_subcommand("compare", "Compare two images (image regression); exit 0 match, 1 differ, 2 unreadable");
+  compare_cmd->add_option("A", compare.a, "first image")->required();
+  compare_cmd->add_option("B", compare.b, "second image")->required();
+  compare_cmd->add_option("--max-channel-delta", compare.max_channel_delta, "per-channel tolerance (0..255)")->capture_default_str();
+  compare_cmd->add_option("--max-bad-fraction", compare.max_bad_fraction, "allowed fraction of pixels beyond it")->capture_default_str();
+  compare_cmd->add_option("--diff", compare.diff, "write a difference heat map (PNG)");
 
   try {
     cli.parse(argc, argv);
@@ -22,6 +31,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*model_cmd) return inhand::app::RunModel(model);
+    if (*compare_cmd) return inhand::app::RunCompare(compare);
   } catch (const inhand::InputError& e) {
     std::cerr << "inhand: error: " << e.what() << "\n";
     return 2;

@@ -1,12 +1,17 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <functional>
 #include <map>
 
 #include "inhand/app/commands.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
+#include "inhand/kinematics/kinematics.hpp"
+#include "inhand/renderer/image_io.hpp"
+#include "inhand/renderer/overlay.hpp"
+#include "inhand/renderer/views.hpp"
 
 namespace inhand::app {
 
@@ -149,16 +154,64 @@ int PrintObject(const ObjectModel& obj, bool as_json) {
   return 0;
 }
 
+// Three views around the model's bounding box, side by side, with captions.
+void RenderPreview(const std::string& path, const std::string& title,
+                   const std::function<void(Renderer&, Scene&)>& populate, const Aabb& box) {
+  Renderer renderer;
+  Scene scene;
+  scene.K = IntrinsicsFromFov(480, 480, 40.0);
+  scene.background = Vec3(0.86, 0.88, 0.91);
+  populate(renderer, scene);
+  const double radius = std::max(0.5 * box.Size().norm(), 0.02);
+  const double distance = 1.15 * radius / std::sin(20.0 * M_PI / 180.0);
+  std::vector<Image8> views;
+  const std::vector<std::pair<double, double>> angles = {{-0.5 * M_PI, 0.35}, {0.0, 0.35}, {0.6, 1.2}};
+  for (const auto& [azimuth, elevation] : angles) {
+    scene.T_PC = OrbitCamera(box.Center(), distance, azimuth, elevation);
+    RenderOutput out;
+    renderer.Render(scene, out, false);
+    views.push_back(out.colour);
+  }
+  const Image8 all = SideBySide({&views[0], &views[1], &views[2]}, {title, "side", "above"});
+  WriteImage(path, all);
+}
+
 }  // namespace
 
 int RunModel(const ModelCommand& cmd) {
   PackageMap packages;
   for (const std::string& spec : cmd.packages) packages.AddSpec(spec);
-  if (std::filesystem::path(cmd.file).extension() == ".json")
-    return PrintObject(LoadObjectModel(cmd.file, packages), cmd.json);
+  if (std::filesystem::path(cmd.file).extension() == ".json") {
+    const ObjectModel object = LoadObjectModel(cmd.file, packages);
+    const int code = PrintObject(object, cmd.json);
+    if (!cmd.render.empty())
+      RenderPreview(cmd.render, object.name,
+                    [&](Renderer& r, Scene& s) { AddObject(s, UploadObject(r, object), Transform::Identity()); },
+                    object.Bounds());
+    return code;
+  }
   HandLoadOptions options;
   options.packages = packages;
-  return PrintHand(LoadHandModel(cmd.file, options), cmd.json);
+  const HandModel hand = LoadHandModel(cmd.file, options);
+  const int code = PrintHand(hand, cmd.json);
+  if (!cmd.render.empty()) {
+    // Joints at a third of their range: a relaxed, slightly closed hand.
+    Eigen::VectorXd q(hand.num_q());
+    for (int i = 0; i < hand.num_q(); ++i) {
+      const Joint& j = hand.joints[hand.q_joints[i]];
+      q[i] = j.has_limits ? j.lower + (j.upper - j.lower) / 3.0 : 0.0;
+      if (j.has_limits && j.lower <= 0.0 && j.upper >= 0.0 && j.upper - j.lower < 1.0) q[i] = 0.0;  // abduction-like
+    }
+    KinematicsData kin(hand);
+    kin.Update(hand, q);
+    Aabb box;
+    for (std::size_t l = 0; l < hand.links.size(); ++l)
+      for (const TriangleMesh& m : hand.links[l].visual)
+        for (const Vec3& v : m.vertices) box.Extend(kin.T_PL(static_cast<int>(l)) * v);
+    RenderPreview(cmd.render, hand.name,
+                  [&](Renderer& r, Scene& s) { AddHand(s, UploadHand(r, hand), kin.link_poses()); }, box);
+  }
+  return code;
 }
 
 }  // namespace inhand::app

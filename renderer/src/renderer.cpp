@@ -22,11 +22,12 @@ namespace inhand {
 Eigen::Matrix4d ProjectionMatrix(const Intrinsics& K, double n, double f) {
   const double W = K.width, H = K.height;
   Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
-  // NDC x = 2 (u + 0.5) / W - 1 and NDC y = 1 - 2 (v + 0.5) / H, with w = z (camera z forward).
+  // NDC x = 2 (u + 0.5) / W - 1 and NDC y = 2 (v + 0.5) / H - 1, with w = z (camera z forward).
+  // Image rows thus map to GL rows in reading order: glReadPixels returns the top row first.
   P(0, 0) = 2.0 * K.fx / W;
   P(0, 2) = 2.0 * (K.cx + 0.5) / W - 1.0;
-  P(1, 1) = -2.0 * K.fy / H;
-  P(1, 2) = 1.0 - 2.0 * (K.cy + 0.5) / H;
+  P(1, 1) = 2.0 * K.fy / H;
+  P(1, 2) = 2.0 * (K.cy + 0.5) / H - 1.0;
   P(2, 2) = (f + n) / (f - n);
   P(2, 3) = -2.0 * f * n / (f - n);
   P(3, 2) = 1.0;
@@ -119,9 +120,6 @@ struct Renderer::Impl {
   std::map<std::string, GLuint> textures;
   GLuint fbo = 0, rb_color = 0, rb_label = 0, rb_depthf = 0, rb_zbuffer = 0;
   int fb_w = 0, fb_h = 0;
-  std::vector<std::uint8_t> rgba_buf;
-  std::vector<float> depth_buf;
-  std::vector<std::uint16_t> label_buf;
 
   void MakeCurrent() {
     if (!OSMesaMakeCurrent(ctx, default_buffer.data(), GL_UNSIGNED_BYTE, 16, 16))
@@ -334,40 +332,22 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
   }
   glBindVertexArray(0);
 
-  // Read back; GL rows are bottom-up.
+  // Read back straight into the output: the projection put the top image row first.
   out.width = W;
   out.height = H;
-  out.colour = Image8(W, H, 3);
-  r.rgba_buf.resize(std::size_t(W) * H * 4);
+  if (out.colour.width != W || out.colour.height != H || out.colour.channels != 3) out.colour = Image8(W, H, 3);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadBuffer(GL_COLOR_ATTACHMENT0);
-  glReadPixels(0, 0, W, H, GL_RGBA, GL_UNSIGNED_BYTE, r.rgba_buf.data());
-  for (int y = 0; y < H; ++y) {
-    const std::uint8_t* src = &r.rgba_buf[std::size_t(H - 1 - y) * W * 4];
-    std::uint8_t* dst = out.colour.pixel(0, y);
-    for (int x = 0; x < W; ++x) {
-      dst[3 * x] = src[4 * x];
-      dst[3 * x + 1] = src[4 * x + 1];
-      dst[3 * x + 2] = src[4 * x + 2];
-    }
-  }
+  glReadPixels(0, 0, W, H, GL_RGB, GL_UNSIGNED_BYTE, out.colour.data.data());
   if (with_depth_and_labels) {
-    r.depth_buf.resize(std::size_t(W) * H);
-    r.label_buf.resize(std::size_t(W) * H);
-    glReadBuffer(GL_COLOR_ATTACHMENT2);
-    glReadPixels(0, 0, W, H, GL_RED, GL_FLOAT, r.depth_buf.data());
-    glReadBuffer(GL_COLOR_ATTACHMENT1);
-    glReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, r.label_buf.data());
     out.depth.resize(std::size_t(W) * H);
     out.label.resize(std::size_t(W) * H);
-    for (int y = 0; y < H; ++y) {
-      const std::size_t src = std::size_t(H - 1 - y) * W, dst = std::size_t(y) * W;
-      for (int x = 0; x < W; ++x) {
-        const float z = r.depth_buf[src + x];
-        out.depth[dst + x] = z > 0.0f ? z : std::numeric_limits<float>::infinity();
-        out.label[dst + x] = r.label_buf[src + x];
-      }
-    }
+    glReadBuffer(GL_COLOR_ATTACHMENT2);
+    glReadPixels(0, 0, W, H, GL_RED, GL_FLOAT, out.depth.data());
+    for (float& z : out.depth)
+      if (!(z > 0.0f)) z = std::numeric_limits<float>::infinity();
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, out.label.data());
   } else {
     out.depth.clear();
     out.label.clear();

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
+
+#include "inhand/renderer/image_io.hpp"
 
 #include "test_support.hpp"
 
@@ -70,6 +73,48 @@ TEST(Cli, BadInputExitsNonZeroWithOneClearLine) {
     EXPECT_EQ(r.output.find("terminate"), std::string::npos);  // never a crash
   }
   EXPECT_NE(test::RunInhand("no-such-command").exit_code, 0);
+}
+
+}  // namespace
+}  // namespace inhand
+
+namespace inhand {
+namespace {
+
+TEST(Cli, CompareExitCodesAndDiff) {
+  test::TempDir dir;
+  const std::string golden = test::SourceDir() + "/tests/golden/hand_ketchup.png";
+  const test::CommandResult same = test::RunInhand("compare " + golden + " " + golden);
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_NE(same.output.find("max channel delta 0"), std::string::npos);
+  const test::CommandResult differ = test::RunInhand("compare " + golden + " " + test::SourceDir() +
+                                                     "/tests/golden/overlay_fig1.png --diff " + (dir / "d.png"));
+  EXPECT_EQ(differ.exit_code, 1) << differ.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "d.png"));
+  // Loose enough tolerances accept the same pair.
+  EXPECT_EQ(test::RunInhand("compare " + golden + " " + test::SourceDir() +
+                            "/tests/golden/overlay_fig1.png --max-channel-delta 255").exit_code, 0);
+  const test::CommandResult missing = test::RunInhand("compare " + golden + " " + (dir / "none.png"));
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.output.find("none.png"), std::string::npos);
+  dir.Write("bad.png", "not an image");
+  EXPECT_EQ(test::RunInhand("compare " + golden + " " + (dir / "bad.png")).exit_code, 2);
+  EXPECT_EQ(test::RunInhand("compare " + golden + " " + golden + " --max-bad-fraction 3").exit_code, 2);
+}
+
+TEST(Cli, ModelRenderWritesAPreview) {
+  test::TempDir dir;
+  const test::CommandResult r = test::RunInhand("model " + test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf") +
+                                                " --render " + (dir / "hand.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Image8 img = ReadImage(dir / "hand.png");
+  EXPECT_EQ(img.height, 480);
+  EXPECT_EQ(img.width, 1440);
+  // Not blank: the dark hand covers a good part of the light background.
+  long dark = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) dark += img.pixel(x, y)[0] < 120;
+  EXPECT_GT(dark, 0.05 * img.width * img.height);
 }
 
 }  // namespace

@@ -114,4 +114,3 @@ BENCHMARK(BM_Step_Allegro_YcbMustard)->Unit(benchmark::kMicrosecond);
 }  // namespace
 }  // namespace inhand
 
-BENCHMARK_MAIN();

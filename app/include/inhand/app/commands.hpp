@@ -11,7 +11,17 @@ struct ModelCommand {
   std::string file;                   // a hand URDF, or an object description (.json)
   std::vector<std::string> packages;  // NAME=DIR
   bool json = false;
+  std::string render;                 // PNG preview of the hand (or object), "" for none
 };
 int RunModel(const ModelCommand& cmd);
+
+struct CompareCommand {
+  std::string a, b;
+  int max_channel_delta = 12;         // a pixel is bad when a channel differs by more
+  double max_bad_fraction = 0.003;    // the images match when at most this fraction is bad
+  std::string diff;                   // heat map PNG, "" for none
+};
+// Exit 0 within tolerance, 1 outside, 2 on unreadable input.
+int RunCompare(const CompareCommand& cmd);
 
 }  // namespace inhand::app
