@@ -24,6 +24,16 @@ int main(int argc, char** argv) {
   compare_cmd->add_option("--max-bad-fraction", compare.max_bad_fraction, "allowed fraction of pixels beyond it")->capture_default_str();
   compare_cmd->add_option("--diff", compare.diff, "write a difference heat map (PNG)");
 
+  inhand::app::SimulateCommand simulate;
+  auto* simulate_cmd = cli.add_subcommand("simulate", "Simulate one of the paper's experiments into a session");
+  simulate_cmd->add_option("SCENARIO", simulate.scenario, "scenario name (--list shows them)");
+  simulate_cmd->add_option("--out", simulate.out, "session directory to write");
+  simulate_cmd->add_option("--seed", simulate.seed, "random seed (noise, biases, initial error)")->capture_default_str();
+  simulate_cmd->add_option("--noise", simulate.noise, "noise profile: none, paper or hard")->capture_default_str();
+  simulate_cmd->add_flag("--list", simulate.list, "list the scenarios");
+  simulate_cmd->add_flag("--overwrite", simulate.overwrite, "replace an existing session directory");
+  simulate_cmd->add_flag("--no-images", simulate.no_images, "joints and ground truth only (fast)");
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -32,6 +42,7 @@ int main(int argc, char** argv) {
   try {
     if (*model_cmd) return inhand::app::RunModel(model);
     if (*compare_cmd) return inhand::app::RunCompare(compare);
+    if (*simulate_cmd) return inhand::app::RunSimulate(simulate);
   } catch (const inhand::InputError& e) {
     std::cerr << "inhand: error: " << e.what() << "\n";
     return 2;

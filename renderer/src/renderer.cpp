@@ -154,8 +154,12 @@ struct Renderer::Impl {
   }
 
   GLuint Texture(const Material& m) {
-    const std::string key = !m.texture_file.empty() ? m.texture_file
-                                                     : "blob:" + std::to_string(reinterpret_cast<std::uintptr_t>(&m)) + ":" + std::to_string(m.texture_blob.size());
+    std::string key = m.texture_file;
+    if (key.empty()) {  // embedded: keyed by content (FNV-1a)
+      std::uint64_t h = 1469598103934665603ULL;
+      for (std::uint8_t byte : m.texture_blob) h = (h ^ byte) * 1099511628211ULL;
+      key = "blob:" + std::to_string(h) + ":" + std::to_string(m.texture_blob.size());
+    }
     if (auto it = textures.find(key); it != textures.end()) return it->second;
     cv::Mat bgr = !m.texture_file.empty() ? cv::imread(m.texture_file, cv::IMREAD_COLOR)
                                           : cv::imdecode(m.texture_blob, cv::IMREAD_COLOR);

@@ -24,4 +24,15 @@ struct CompareCommand {
 // Exit 0 within tolerance, 1 outside, 2 on unreadable input.
 int RunCompare(const CompareCommand& cmd);
 
+struct SimulateCommand {
+  std::string scenario;
+  std::string out;
+  unsigned seed = 1;
+  std::string noise = "paper";
+  bool list = false;
+  bool overwrite = false;
+  bool no_images = false;
+};
+int RunSimulate(const SimulateCommand& cmd);
+
 }  // namespace inhand::app

@@ -1,0 +1,215 @@
+#include "scenarios.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace inhand::sim {
+
+namespace {
+
+// Palm frame axes given in the world: x towards the thumb, y along the fingers, z out of the palm.
+Mat3 PalmAxes(const Vec3& x, const Vec3& y) {
+  Mat3 R;
+  R << x.normalized(), y.normalized(), x.normalized().cross(y.normalized());
+  return R;
+}
+
+Transform Pose(const Vec3& p, const Mat3& R) { return MakeTransform(p, R); }
+
+std::map<std::string, double> Hand(double abduction, double f1, double f2, double f3, double thumb_abd,
+                                   double t1, double t2, double t3) {
+  std::map<std::string, double> q;
+  for (const char* f : {"index", "middle", "ring"}) {
+    q[std::string(f) + "_abduction"] = 0.0;
+    q[std::string(f) + "_flex1"] = f1;
+    q[std::string(f) + "_flex2"] = f2;
+    q[std::string(f) + "_flex3"] = f3;
+  }
+  q["index_abduction"] = abduction;
+  q["ring_abduction"] = -abduction;
+  q["thumb_abduction"] = thumb_abd;
+  q["thumb_flex1"] = t1;
+  q["thumb_flex2"] = t2;
+  q["thumb_flex3"] = t3;
+  return q;
+}
+
+Keyframe Key(double t, const Transform& T_WP, std::map<std::string, double> q = {}, double grip = 1.0) {
+  Keyframe k;
+  k.t = t;
+  k.T_WP = T_WP;
+  k.q = std::move(q);
+  k.grip = grip;
+  return k;
+}
+
+Transform Lifted(const Transform& T, double dz) {
+  Transform out = T;
+  out.translation().z() += dz;
+  return out;
+}
+
+Transform Back(const Transform& T, double d) {  // along the palm's -z
+  Transform out = T;
+  out.translation() -= d * T.linear().col(2);
+  return out;
+}
+
+std::vector<Scenario> Build() {
+  std::vector<Scenario> all;
+  const auto open = Hand(0.05, 0.0, 0.05, 0.05, 0.3, 0.0, 0.1, 0.1);
+
+  {  // Exp. I: power grasp of a ketchup bottle, which tilts in the hand as it is lifted.
+    Scenario s;
+    s.name = "ketchup-power-grasp";
+    s.description = "power grasp of a ketchup bottle lying on the table, from above and off its centre of mass; lifted, it tilts in the hand";
+    s.object = "ketchup_bottle";
+    // Lying on its narrow side, axis along +x, the label (y_O face) towards the camera (-y).
+    Mat3 R_WO;
+    R_WO << Vec3(0, 0, 1), Vec3(0, -1, 0), Vec3(1, 0, 0);
+    s.T_WO = MakeTransform(Vec3(-0.10, 0.0, 0.034), R_WO);
+    // Palm facing down on the bottle, across it (thumb towards the cap), fingers down its far
+    // side (-y), the thumb on its near side; 2.5 cm towards the base from the centre of mass.
+    const Transform grasp = Pose(Vec3(-0.035, 0.054, 0.069), PalmAxes(Vec3(1, 0, 0), Vec3(0, -1, 0)));
+    const auto closed = Hand(0.0, 1.57, 0.35, 0.2, 0.3, 0.6, 0.6, 0.4);
+    s.keys = {Key(0.0, Lifted(grasp, 0.07), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
+              Key(2.2, grasp, closed, 0.9), Key(2.6, grasp, closed, 0.9),
+              Key(4.0, Lifted(grasp, 0.12), closed, 0.9), Key(5.0, Lifted(grasp, 0.12), closed, 0.7),
+              Key(6.0, Lifted(grasp, 0.12), closed, 0.7)};
+    s.close_start = 1.2;
+    s.grasp_closed = 2.6;
+    s.camera_eye = Vec3(0.25, -0.42, 0.38);
+    s.camera_target = Vec3(-0.02, 0.0, 0.08);
+    s.initial_error_direction_W = Vec3(0, 0, 1);  // "20 mm too high", as in Exp. I
+    all.push_back(s);
+  }
+  {  // Exp. II: fingertip grasp of a brush, then rolled in the hand by the thumb and the index.
+    Scenario s;
+    s.name = "brush-rotation";
+    s.description = "fingertip grasp of a brush lying on the table, lift, roll it in the fingers";
+    s.object = "brush";
+    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0115), ExpSO3(Vec3(0, 0, M_PI / 2)));  // handle along y, resting
+    // Palm facing down, fingers along +x above the handle.
+    const Transform grasp = Pose(Vec3(-0.03, 0.045, 0.075), PalmAxes(Vec3(0, -1, 0), Vec3(1, 0, 0)));
+    const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
+    auto roll_a = pinch, roll_b = pinch;
+    roll_a["index_flex1"] += 0.25, roll_a["thumb_flex1"] -= 0.25;
+    roll_b["index_flex1"] -= 0.25, roll_b["thumb_flex1"] += 0.25;
+    s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
+              Key(2.2, grasp, pinch, 0.8), Key(2.5, grasp, pinch, 0.8), Key(3.5, Lifted(grasp, 0.08), pinch, 0.8),
+              Key(4.5, Lifted(grasp, 0.08), roll_a, 0.8), Key(5.5, Lifted(grasp, 0.08), roll_b, 0.8),
+              Key(6.0, Lifted(grasp, 0.08), roll_b, 0.8)};
+    s.close_start = 1.2;
+    s.grasp_closed = 2.5;
+    all.push_back(s);
+  }
+  {  // Exp. III: push a mostly transparent water bottle along the table, then grasp it.
+    Scenario s;
+    s.name = "water-push-grasp";
+    s.description = "push a water bottle along the table with the palm, then power-grasp and lift it";
+    s.object = "water_bottle";
+    const Mat3 R = PalmAxes(Vec3(0, 0, 1), Vec3(0, -1, 0));
+    const Transform touch = Pose(Vec3(-0.036, 0.08, 0.07), R);
+    Transform pushed = touch;
+    pushed.translation().x() += 0.06;
+    const auto closed = Hand(0.0, 1.4, 1.5, 1.2, 0.6, 0.9, 1.0, 0.8);
+    s.keys = {Key(0.0, Back(touch, 0.06), open), Key(0.8, Back(touch, 0.01), open), Key(2.2, pushed, open),
+              Key(2.4, pushed, open), Key(3.4, pushed, closed, 0.6), Key(3.7, pushed, closed, 0.6),
+              Key(5.0, Lifted(pushed, 0.12), closed, 0.6), Key(6.0, Lifted(pushed, 0.12), closed, 0.6)};
+    s.close_start = 2.4;
+    s.grasp_closed = 3.7;
+    s.camera_target = Vec3(0.04, 0.0, 0.12);
+    all.push_back(s);
+  }
+  {  // Exp. IV: a free-form shampoo bottle in a grasp that is neither power nor fingertip.
+    Scenario s;
+    s.name = "shampoo-grasp";
+    s.description = "grasp a free-form shampoo bottle with fingers and thumb from above its middle, lift and turn";
+    s.object = "shampoo_bottle";
+    const Mat3 R = PalmAxes(Vec3(0, 0, 1), Vec3(0, -1, 0));
+    const Transform grasp = Pose(Vec3(-0.047, 0.08, 0.10), R);
+    const auto closed = Hand(0.05, 0.9, 1.3, 1.0, 0.7, 0.8, 0.9, 0.7);
+    Transform turned = Lifted(grasp, 0.10);
+    turned.linear() = ExpSO3(Vec3(0, 0, 0.35)) * turned.linear();
+    s.keys = {Key(0.0, Back(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
+              Key(2.2, grasp, closed, 0.7), Key(2.5, grasp, closed, 0.7), Key(4.0, Lifted(grasp, 0.10), closed, 0.7),
+              Key(5.2, turned, closed, 0.7), Key(6.0, turned, closed, 0.7)};
+    s.close_start = 1.2;
+    s.grasp_closed = 2.5;
+    all.push_back(s);
+  }
+  {  // Exp. V: fingertip grasp of a pen lying on the table, rolled twice back and forth.
+    Scenario s;
+    s.name = "pen-fingertip";
+    s.description = "fingertip grasp of a pen lying on the table, lift, roll it twice back and forth";
+    s.object = "pen";
+    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0055), ExpSO3(Vec3(0, 0, M_PI / 2)));
+    const Transform grasp = Pose(Vec3(-0.035, 0.02, 0.07), PalmAxes(Vec3(0, -1, 0), Vec3(1, 0, 0)));
+    const auto pinch = Hand(0.0, 1.0, 1.0, 0.5, 1.0, 0.6, 0.5, 0.5);
+    auto roll_a = pinch, roll_b = pinch;
+    roll_a["index_flex1"] += 0.2, roll_a["thumb_flex1"] -= 0.2;
+    roll_b["index_flex1"] -= 0.2, roll_b["thumb_flex1"] += 0.2;
+    s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
+              Key(2.2, grasp, pinch, 0.6), Key(2.5, grasp, pinch, 0.6), Key(3.3, Lifted(grasp, 0.07), pinch, 0.6),
+              Key(4.0, Lifted(grasp, 0.07), roll_a, 0.6), Key(4.7, Lifted(grasp, 0.07), roll_b, 0.6),
+              Key(5.4, Lifted(grasp, 0.07), roll_a, 0.6), Key(6.1, Lifted(grasp, 0.07), roll_b, 0.6),
+              Key(6.5, Lifted(grasp, 0.07), pinch, 0.6)};
+    s.close_start = 1.2;
+    s.grasp_closed = 2.5;
+    all.push_back(s);
+  }
+  return all;
+}
+
+double Smooth(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * (3.0 - 2.0 * x);
+}
+
+// Index of the segment [keys[i], keys[i+1]] holding t and the blend weight.
+std::pair<std::size_t, double> Segment(const Scenario& s, double t) {
+  if (t <= s.keys.front().t) return {0, 0.0};
+  for (std::size_t i = 0; i + 1 < s.keys.size(); ++i)
+    if (t <= s.keys[i + 1].t) return {i, Smooth((t - s.keys[i].t) / (s.keys[i + 1].t - s.keys[i].t))};
+  return {s.keys.size() - 2, 1.0};
+}
+
+}  // namespace
+
+const std::vector<Scenario>& Scenarios() {
+  static const std::vector<Scenario> all = Build();
+  return all;
+}
+
+const Scenario* FindScenario(const std::string& name) {
+  for (const Scenario& s : Scenarios())
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+Transform PalmAt(const Scenario& s, double t) {
+  const auto [i, w] = Segment(s, t);
+  const Transform& a = s.keys[i].T_WP;
+  const Transform& b = s.keys[i + 1].T_WP;
+  return MakeTransform((1.0 - w) * a.translation() + w * b.translation(),
+                       Quat(a.linear()).slerp(w, Quat(b.linear())));
+}
+
+std::map<std::string, double> TargetsAt(const Scenario& s, double t, double* grip) {
+  // Each key's targets hold from that key on; blends happen towards the next key's values.
+  std::vector<std::map<std::string, double>> full(s.keys.size());
+  for (std::size_t k = 0; k < s.keys.size(); ++k) {
+    full[k] = k ? full[k - 1] : std::map<std::string, double>{};
+    for (const auto& [name, v] : s.keys[k].q) full[k][name] = v;
+  }
+  const auto [i, w] = Segment(s, t);
+  std::map<std::string, double> out = full[i];
+  for (const auto& [name, v] : full[i + 1]) {
+    const auto it = full[i].find(name);
+    out[name] = it == full[i].end() ? v : (1.0 - w) * it->second + w * v;
+  }
+  if (grip) *grip = (1.0 - w) * s.keys[i].grip + w * s.keys[i + 1].grip;
+  return out;
+}
+
+}  // namespace inhand::sim

@@ -1,0 +1,40 @@
+#pragma once
+// Internal: the paper's five experiments as scripts for the simulator.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "inhand/core/so3.hpp"
+
+namespace inhand::sim {
+
+struct Keyframe {
+  double t = 0.0;                          // [s]
+  Transform T_WP = Transform::Identity();  // palm pose (the arm)
+  std::map<std::string, double> q;         // joint targets; absent joints keep their target
+  double grip = 1.0;                       // scales every joint's torque limit
+};
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  std::string object;                      // folder under assets/objects
+  Transform T_WO = Transform::Identity();  // object on the table at t = 0
+  Vec3 camera_eye = Vec3(0.35, -0.5, 0.45);
+  Vec3 camera_target = Vec3(0.0, 0.0, 0.1);
+  std::vector<Keyframe> keys;
+  double grasp_closed = 0.0;               // [s] when the fingers have closed (for checks)
+  double close_start = 0.0;                // [s] when closing starts
+  Vec3 initial_error_direction_W = Vec3::Zero();  // fixed direction of the initial position
+                                                  // error (0: random)
+  double duration() const { return keys.empty() ? 0.0 : keys.back().t; }
+};
+
+const std::vector<Scenario>& Scenarios();
+const Scenario* FindScenario(const std::string& name);
+
+// Palm pose and joint targets at time t: keys blended with a smoothstep in time.
+Transform PalmAt(const Scenario& s, double t);
+std::map<std::string, double> TargetsAt(const Scenario& s, double t, double* grip);
+
+}  // namespace inhand::sim

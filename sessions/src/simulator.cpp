@@ -1,0 +1,481 @@
+#include "inhand/sessions/simulator.hpp"
+
+#include <apriltag/apriltag.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
+#include <apriltag/tag36h11.h>
+#include <apriltag/tagStandard41h12.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "inhand/contacts/bullet_contact_query.hpp"
+#include "inhand/core/error.hpp"
+#include "inhand/io/detail/json_fields.hpp"
+#include "inhand/io/object_loader.hpp"
+#include "inhand/io/urdf_loader.hpp"
+#include "inhand/kinematics/kinematics.hpp"
+#include "inhand/renderer/views.hpp"
+#include "inhand/sessions/session.hpp"
+#include "scenarios.hpp"
+#include "sim_world.hpp"
+
+namespace fs = std::filesystem;
+
+namespace inhand {
+
+NoiseProfile ParseNoiseProfile(const std::string& name) {
+  if (name == "none") return NoiseProfile::kNone;
+  if (name == "paper") return NoiseProfile::kPaper;
+  if (name == "hard") return NoiseProfile::kHard;
+  throw InputError("noise profile '" + name + "' is unknown, expected none, paper or hard");
+}
+
+const char* NoiseProfileName(NoiseProfile p) {
+  switch (p) {
+    case NoiseProfile::kNone: return "none";
+    case NoiseProfile::kPaper: return "paper";
+    case NoiseProfile::kHard: return "hard";
+  }
+  return "?";
+}
+
+std::vector<ScenarioInfo> ListScenarios() {
+  std::vector<ScenarioInfo> out;
+  for (const sim::Scenario& s : sim::Scenarios()) out.push_back({s.name, s.description, s.duration()});
+  return out;
+}
+
+namespace {
+
+// The numbers of each noise profile (documented in sessions/FORMAT.md).
+struct Noise {
+  double initial_position = 0.0;     // [m] magnitude of the initial estimate's error
+  double initial_orientation = 0.0;  // [rad]
+  double bias_sigma = 0.0;           // [rad] constant joint biases ~ N(0, σ)
+  double joint_sigma = 0.0;          // [rad] white noise per sample
+  double torque_sigma = 0.0;         // [N m]
+  double hand_eye_position = 0.0;    // [m] constant error of the recorded T_PC
+  double hand_eye_orientation = 0.0; // [rad]
+  double pixel_sigma = 0.0;          // [grey levels]
+  double blur_sigma = 0.0;           // [px]
+  int occluders = 0;                 // extra objects between camera and hand
+};
+
+Noise NoiseFor(NoiseProfile p) {
+  Noise n;
+  if (p == NoiseProfile::kNone) return n;
+  n.initial_position = 0.020;
+  n.initial_orientation = 5.0 * M_PI / 180;
+  n.bias_sigma = 3.0 * M_PI / 180;
+  n.joint_sigma = 0.1 * M_PI / 180;
+  n.torque_sigma = 0.02;
+  n.hand_eye_position = 0.002;
+  n.hand_eye_orientation = 0.5 * M_PI / 180;
+  n.pixel_sigma = 3.0;
+  n.blur_sigma = 0.7;
+  if (p == NoiseProfile::kHard) {
+    n.initial_position *= 2;
+    n.initial_orientation *= 2;
+    n.bias_sigma *= 2;
+    n.joint_sigma *= 2;
+    n.torque_sigma *= 2;
+    n.hand_eye_position *= 2;
+    n.hand_eye_orientation *= 2;
+    n.pixel_sigma *= 2;
+    n.blur_sigma *= 2;
+    n.occluders = 2;
+  }
+  return n;
+}
+
+std::string AssetDir() {
+  if (const char* env = std::getenv("INHAND_ASSETS"); env && *env) return env;
+  return INHAND_ASSET_DIR;
+}
+
+std::string ReadBinary(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Copies a model folder into the session, so the session is self-contained.
+void CopyFolder(SessionWriter& w, const fs::path& from, const std::string& to) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::recursive_directory_iterator(from))
+    if (e.is_regular_file()) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const fs::path& f : files) w.AddFile(to + "/" + fs::relative(f, from).string(), ReadBinary(f));
+}
+
+// A tag bitmap (white border included) as a textured quad in the tag frame.
+TriangleMesh TagQuad(const TagPlacement& tag) {
+  apriltag_family_t* fam = nullptr;
+  void (*destroy)(apriltag_family_t*) = nullptr;
+  if (tag.family == "tag36h11") fam = tag36h11_create(), destroy = tag36h11_destroy;
+  else if (tag.family == "tag25h9") fam = tag25h9_create(), destroy = tag25h9_destroy;
+  else if (tag.family == "tag16h5") fam = tag16h5_create(), destroy = tag16h5_destroy;
+  else if (tag.family == "tagStandard41h12") fam = tagStandard41h12_create(), destroy = tagStandard41h12_destroy;
+  else throw InputError("tag family '" + tag.family + "' cannot be rendered (tag36h11, tag25h9, tag16h5, tagStandard41h12)");
+  if (tag.id < 0 || static_cast<unsigned>(tag.id) >= fam->ncodes) {
+    destroy(fam);
+    throw InputError("tag id " + std::to_string(tag.id) + " is not in family " + tag.family);
+  }
+  image_u8_t* im = apriltag_to_image(fam, tag.id);
+  const int w = im->width;
+  cv::Mat small(im->height, im->width, CV_8UC1);
+  for (int y = 0; y < im->height; ++y)
+    for (int x = 0; x < im->width; ++x) small.at<std::uint8_t>(y, x) = im->buf[y * im->stride + x];
+  free(im->buf);
+  free(im);
+  // The black border sits one module inside the bitmap (the family's width_at_border).
+  const double modules_to_border = static_cast<double>(fam->width_at_border);
+  destroy(fam);
+  cv::Mat big, rgb;
+  cv::resize(small, big, cv::Size(w * 24, w * 24), 0, 0, cv::INTER_NEAREST);
+  cv::cvtColor(big, rgb, cv::COLOR_GRAY2BGR);
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", rgb, png);
+  const double half = 0.5 * tag.size * w / modules_to_border;
+  TriangleMesh m;
+  m.vertices = {Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0), Vec3(-half, half, 0)};
+  m.normals.assign(4, Vec3::UnitZ());
+  m.uvs = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  m.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
+  m.material.name = tag.family + ":" + std::to_string(tag.id);
+  m.material.rgba = Eigen::Vector4d(1, 1, 1, 1);
+  m.material.texture_blob = png;
+  return m;
+}
+
+// A flat textured rectangle (table top, backdrop) with a procedural pattern.
+TriangleMesh TexturedBox(const Vec3& half, const cv::Mat& texture_bgr) {
+  TriangleMesh m = ConvexPiece::Box(half, Transform::Identity()).ToMesh();
+  m.uvs.clear();
+  for (const Vec3& v : m.vertices) m.uvs.emplace_back(0.5 + 0.5 * v.x() / half.x(), 0.5 + 0.5 * v.y() / half.y());
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", texture_bgr, png);
+  m.material.texture_blob = png;
+  m.material.rgba = Eigen::Vector4d(1, 1, 1, 1);
+  return m;
+}
+
+cv::Mat WoodTexture() {
+  cv::Mat t(256, 256, CV_8UC3);
+  for (int y = 0; y < t.rows; ++y)
+    for (int x = 0; x < t.cols; ++x) {
+      const double g = 0.5 + 0.5 * std::sin(0.09 * x + 2.5 * std::sin(0.021 * y) + 0.7 * std::sin(0.13 * y));
+      t.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<std::uint8_t>(70 + 25 * g), static_cast<std::uint8_t>(110 + 30 * g),
+                                        static_cast<std::uint8_t>(150 + 35 * g));
+    }
+  return t;
+}
+
+cv::Mat ClutterTexture(std::mt19937& rng) {
+  cv::Mat t(512, 512, CV_8UC3, cv::Scalar(200, 205, 210));
+  std::uniform_int_distribution<int> pos(0, 511), size(20, 140), colour(30, 240);
+  for (int i = 0; i < 60; ++i)
+    cv::rectangle(t, cv::Rect(pos(rng), pos(rng), size(rng), size(rng)), cv::Scalar(colour(rng), colour(rng), colour(rng)), cv::FILLED);
+  return t;
+}
+
+Vec3 RandomUnit(std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  return Vec3(n(rng), n(rng), n(rng)).normalized();
+}
+
+// Joint admittance (see simulator.hpp).
+struct JointController {
+  double stiffness = 3.0;  // [N m/rad]
+  double damping = 0.15;   // [N m s/rad]
+};
+
+}  // namespace
+
+SimulationSummary Simulate(const SimulateOptions& opt) {
+  const sim::Scenario* scenario = sim::FindScenario(opt.scenario);
+  if (scenario == nullptr) {
+    std::string names;
+    for (const auto& s : sim::Scenarios()) names += (names.empty() ? "" : ", ") + s.name;
+    throw InputError("unknown scenario '" + opt.scenario + "', expected one of: " + names);
+  }
+  if (!(opt.physics_rate >= 500.0) || !(opt.joint_rate > 0.0) || opt.joint_rate > opt.physics_rate ||
+      !(opt.camera_rate > 0.0) || opt.camera_rate > opt.joint_rate)
+    throw InputError("simulation rates must satisfy physics >= 500 Hz >= joints >= camera > 0");
+  if (opt.image_width < 16 || opt.image_height < 16 || opt.image_width % 2 || opt.image_height % 2)
+    throw InputError("image size must be even and at least 16x16");
+  const auto wall_start = std::chrono::steady_clock::now();
+  const std::string assets = AssetDir();
+  const fs::path hand_dir = fs::path(assets) / "hands" / "inhand_hand";
+  const fs::path object_dir = fs::path(assets) / "objects" / scenario->object;
+  const HandModel hand = LoadHandModel((hand_dir / "inhand_hand.urdf").string());
+  const ObjectModel object = LoadObjectModel((object_dir / "object.json").string());
+  const int m = hand.num_q();
+  const Noise noise = NoiseFor(opt.noise);
+  std::mt19937 rng(opt.seed * 7919u + 17u);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+
+  // Constant errors of this session: joint biases, hand-eye calibration, initial estimate.
+  Eigen::VectorXd bias(m);
+  for (int j = 0; j < m; ++j) bias[j] = noise.bias_sigma * gauss(rng);
+  const Transform hand_eye_error = MakeTransform(noise.hand_eye_position * RandomUnit(rng),
+                                                 ExpSO3(noise.hand_eye_orientation * RandomUnit(rng)));
+
+  const double dt = 1.0 / opt.physics_rate;
+  const double duration = scenario->duration() * opt.duration_scale;
+  const int steps = static_cast<int>(std::lround(duration / dt));
+  const int joint_every = std::max(1, static_cast<int>(std::lround(opt.physics_rate / opt.joint_rate)));
+  const int camera_every = std::max(1, static_cast<int>(std::lround(opt.physics_rate / opt.camera_rate)));
+
+  // Joint state from the first targets.
+  Eigen::VectorXd q(m), tau_filtered = Eigen::VectorXd::Zero(m), tau_contact(m);
+  double grip = 1.0;
+  {
+    const auto targets = sim::TargetsAt(*scenario, 0.0, &grip);
+    for (int j = 0; j < m; ++j) {
+      const auto it = targets.find(hand.joints[hand.q_joints[j]].name);
+      q[j] = it == targets.end() ? 0.0 : it->second;
+    }
+  }
+  KinematicsData kin(hand);
+  std::vector<Transform> T_WL(hand.links.size());
+  const auto place_links = [&](const Transform& T_WP) {
+    kin.Update(hand, q);
+    for (std::size_t l = 0; l < hand.links.size(); ++l) T_WL[l] = T_WP * kin.T_PL(static_cast<int>(l));
+  };
+  const Transform T_WO0 = scenario->T_WO;
+  sim::World world(hand, object, T_WO0, 1.5);  // rubber-like finger surfaces
+  place_links(sim::PalmAt(*scenario, 0.0));
+  world.SetLinkPoses(T_WL);
+
+  // Camera fixed in the world, looking at the workspace.
+  Intrinsics K;
+  K.width = opt.image_width;
+  K.height = opt.image_height;
+  K.fx = K.fy = 580.0 * opt.image_width / 640.0;
+  K.cx = 0.5 * opt.image_width - 0.5;
+  K.cy = 0.5 * opt.image_height - 0.5;
+  const Transform T_WC = LookAt(scenario->camera_eye, scenario->camera_target, Vec3::UnitZ());
+
+  std::unique_ptr<Renderer> renderer;
+  Scene world_scene;
+  HandMeshes hand_meshes;
+  std::vector<int> object_meshes, tag_meshes;
+  if (opt.images) {
+    renderer = std::make_unique<Renderer>();
+    hand_meshes = UploadHand(*renderer, hand);
+    object_meshes = UploadObject(*renderer, object);
+    for (const TagPlacement& tag : object.tags) tag_meshes.push_back(renderer->AddMesh(TagQuad(tag)));
+    std::mt19937 clutter_rng(12345);  // the same room for every seed
+    world_scene.K = K;
+    world_scene.T_PC = T_WC;
+    world_scene.background = Vec3(0.55, 0.58, 0.62);
+    const int table = renderer->AddMesh(TexturedBox(Vec3(0.6, 0.4, 0.025), WoodTexture()));
+    world_scene.items.push_back({table, MakeTransform(Vec3(0, 0, -0.025), Mat3::Identity()), kExtraLabelBase, std::nullopt, 1.0, false});
+    const int wall = renderer->AddMesh(TexturedBox(Vec3(0.8, 0.5, 0.01), ClutterTexture(clutter_rng)));
+    world_scene.items.push_back({wall, MakeTransform(Vec3(-0.1, 0.45, 0.3), ExpSO3(Vec3(M_PI / 2, 0, 0))), kExtraLabelBase + 1, std::nullopt, 1.0, false});
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < 6 + noise.occluders; ++i) {
+      const bool occluder = i >= 6;
+      TriangleMesh mesh = i % 2 ? ConvexPiece::Cylinder(0.02 + 0.03 * u(clutter_rng), 0.03 + 0.05 * u(clutter_rng), Transform::Identity()).ToMesh()
+                                : ConvexPiece::Box(Vec3(0.02 + 0.04 * u(clutter_rng), 0.02 + 0.04 * u(clutter_rng), 0.03 + 0.04 * u(clutter_rng)), Transform::Identity()).ToMesh();
+      mesh.material.rgba = Eigen::Vector4d(0.2 + 0.7 * u(clutter_rng), 0.2 + 0.7 * u(clutter_rng), 0.2 + 0.7 * u(clutter_rng), 1.0);
+      const int id = renderer->AddMesh(mesh);
+      const double h = mesh.Bounds().Size().z() / 2;
+      Vec3 where;
+      if (occluder) {  // between the camera and the grasp, low in the view
+        where = scenario->camera_target + (scenario->camera_eye - scenario->camera_target) * (0.35 + 0.1 * i / 8.0);
+        where.x() += (i % 2 ? 0.05 : -0.05);
+        where.z() = h;
+      } else {
+        const double a = -0.6 + 1.3 * i / 6.0;
+        where = Vec3(-0.25 + 0.45 * std::cos(a) * 0.0 + 0.22 * std::sin(a * 3.0) - 0.1, 0.25 + 0.06 * std::cos(a * 2.0), h);
+        where.x() = -0.35 + 0.14 * i;
+      }
+      world_scene.items.push_back({id, MakeTransform(where, ExpSO3(Vec3(0, 0, 0.4 * i))), static_cast<std::uint16_t>(kExtraLabelBase + 2 + i), std::nullopt, 1.0, false});
+    }
+  }
+
+  // Session metadata.
+  SessionInfo info;
+  info.name = scenario->name + "-seed" + std::to_string(opt.seed) + "-" + NoiseProfileName(opt.noise);
+  info.hand_urdf = "model/hand/inhand_hand.urdf";
+  info.object = "model/object/object.json";
+  if (opt.images) info.camera = K;
+  const Transform T_PO0 = sim::PalmAt(*scenario, 0.0).inverse() * T_WO0;
+  {
+    Vec3 dir = scenario->initial_error_direction_W.norm() > 0
+                   ? Vec3(sim::PalmAt(*scenario, 0.0).linear().transpose() * scenario->initial_error_direction_W.normalized())
+                   : RandomUnit(rng);
+    const Vec3 axis = RandomUnit(rng);
+    info.initial_T_PO = MakeTransform(T_PO0.translation() + noise.initial_position * dir,
+                                      ExpSO3(noise.initial_orientation * axis) * T_PO0.linear());
+  }
+  info.sigma_position = 0.020;
+  info.sigma_orientation = 5.0 * M_PI / 180;
+  info.sigma_joint_bias = 5.0 * M_PI / 180;
+  jsonf::Json provenance = {{"generator", "inhand simulate"},
+                            {"scenario", scenario->name},
+                            {"seed", opt.seed},
+                            {"noise", NoiseProfileName(opt.noise)},
+                            {"physics_rate", opt.physics_rate},
+                            {"joint_rate", opt.joint_rate},
+                            {"camera_rate", opt.camera_rate},
+                            {"duration", duration},
+                            {"noise_parameters",
+                             {{"initial_position_m", noise.initial_position},
+                              {"initial_orientation_rad", noise.initial_orientation},
+                              {"bias_sigma_rad", noise.bias_sigma},
+                              {"joint_sigma_rad", noise.joint_sigma},
+                              {"torque_sigma_Nm", noise.torque_sigma},
+                              {"hand_eye_position_m", noise.hand_eye_position},
+                              {"hand_eye_orientation_rad", noise.hand_eye_orientation},
+                              {"pixel_sigma", noise.pixel_sigma},
+                              {"blur_sigma_px", noise.blur_sigma},
+                              {"occluders", noise.occluders}}}};
+  info.provenance_json = provenance.dump();
+  SessionWriter writer(opt.out_dir, info, hand.QNames(), opt.overwrite);
+  CopyFolder(writer, hand_dir, "model/hand");
+  CopyFolder(writer, object_dir, "model/object");
+
+  // Truth for diagnostics and the plausibility checks.
+  BulletContactQuery truth_contacts(hand, object);
+  std::vector<ContactPair> pairs;
+  std::ostringstream contacts_csv;
+  contacts_csv << "t,link,distance,force\n";
+  SimulationSummary summary;
+  summary.session_dir = opt.out_dir;
+  summary.duration = duration;
+  Transform T_PO_grasp = Transform::Identity();
+  bool have_grasp = false;
+  int held = 0, after_grasp = 0;
+  Vec3 p_WO_close = T_WO0.translation();
+  const JointController ctrl;
+  cv::RNG pixel_rng(opt.seed * 104729u + 3u);
+
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * dt;
+    const Transform T_WP = sim::PalmAt(*scenario, t);
+    // Joint admittance towards the targets with bounded motor torque.
+    const auto targets = sim::TargetsAt(*scenario, t, &grip);
+    for (int j = 0; j < m; ++j) {
+      const Joint& joint = hand.joints[hand.q_joints[j]];
+      const auto it = targets.find(joint.name);
+      const double target = it == targets.end() ? q[j] : it->second;
+      const double tau_max = std::max(joint.effort_limit, 0.1) * grip;
+      const double tau_motor = std::clamp(ctrl.stiffness * (target - q[j]), -tau_max, tau_max);
+      double qd = (tau_motor - tau_filtered[j]) / ctrl.damping;
+      const double vmax = joint.velocity_limit > 0 ? joint.velocity_limit : 3.0;
+      qd = std::clamp(qd, -vmax, vmax);
+      q[j] = std::clamp(q[j] + qd * dt, joint.lower, joint.upper);
+    }
+    place_links(T_WP);
+    world.SetLinkPoses(T_WL);
+    world.Step(dt);
+
+    // Contact torques from the solver's impulses: τ = Σ J(c)ᵀ λ, λ in the palm frame.
+    tau_contact.setZero();
+    Eigen::Matrix<double, 3, Eigen::Dynamic> J(3, m);
+    const Transform T_PW = T_WP.inverse();
+    for (const sim::LinkContact& c : world.contacts()) {
+      PointJacobian(hand, kin, c.link, T_PW * c.point_W, J);
+      tau_contact += J.transpose() * (T_PW.linear() * c.force_W);
+    }
+    tau_filtered += (dt / (dt + 0.005)) * (tau_contact - tau_filtered);
+
+    const Transform T_WO = world.ObjectPose();
+    const Transform T_PO = T_PW * T_WO;
+    if (t <= scenario->close_start + 1e-9) p_WO_close = T_WO.translation();
+
+    if (k % joint_every == 0) {
+      Eigen::VectorXd q_meas(m), tau_meas(m);
+      for (int j = 0; j < m; ++j) {
+        q_meas[j] = q[j] - bias[j] + noise.joint_sigma * gauss(rng);
+        tau_meas[j] = tau_filtered[j] + noise.torque_sigma * gauss(rng);
+      }
+      writer.AddJointSample(t, q_meas, tau_meas);
+      writer.AddGroundTruth(t, T_PO);
+      ++summary.joint_samples;
+      // Truth checks with the estimator's own GJK on the true configuration.
+      truth_contacts.Query(kin.link_poses(), T_PO, 0.001, pairs);
+      int touching = 0;
+      for (const ContactPair& p : pairs) {
+        summary.max_penetration = std::max(summary.max_penetration, -p.distance);
+        touching += p.distance < 0.001;
+        contacts_csv << FormatDouble(t) << "," << hand.links[p.link].name << "," << FormatDouble(p.distance) << ",0\n";
+      }
+      if (t >= scenario->grasp_closed) {
+        if (!have_grasp) {
+          T_PO_grasp = T_PO;
+          have_grasp = true;
+        }
+        ++after_grasp;
+        held += touching >= 2;
+        const double rot = RotationDistance(T_PO.linear(), T_PO_grasp.linear()) * 180.0 / M_PI;
+        summary.max_in_hand_rotation_deg = std::max(summary.max_in_hand_rotation_deg, rot);
+        summary.tilt_in_hand_deg = rot;
+      }
+    }
+    if (opt.images && k % camera_every == 0) {
+      Scene scene = world_scene;
+      AddHand(scene, hand_meshes, T_WL);
+      AddObject(scene, object_meshes, T_WO);
+      for (std::size_t i = 0; i < object.tags.size(); ++i) {
+        SceneItem item;
+        item.mesh = tag_meshes[i];
+        // 0.2 mm off the surface: no z-fighting with the object.
+        item.T_PM = T_WO * object.tags[i].T_OT * MakeTransform(Vec3(0, 0, 0.0002), Mat3::Identity());
+        item.label = kObjectLabel;
+        scene.items.push_back(item);
+      }
+      RenderOutput out;
+      renderer->Render(scene, out, false);
+      cv::Mat img(K.height, K.width, CV_8UC3, out.colour.data.data());
+      if (noise.blur_sigma > 0) cv::GaussianBlur(img, img, cv::Size(0, 0), noise.blur_sigma);
+      if (noise.pixel_sigma > 0) {
+        cv::Mat n(img.size(), CV_16SC3);
+        pixel_rng.fill(n, cv::RNG::NORMAL, 0.0, noise.pixel_sigma);
+        cv::Mat sum;
+        img.convertTo(sum, CV_16SC3);
+        sum += n;
+        sum.convertTo(img, CV_8UC3);
+      }
+      writer.AddCameraFrame(t, out.colour, T_PW * T_WC * hand_eye_error);
+      ++summary.camera_frames;
+    }
+  }
+  summary.held_fraction = after_grasp ? double(held) / after_grasp : 0.0;
+  summary.table_travel_before_grasp = (p_WO_close - T_WO0.translation()).norm();
+  summary.lift_height = world.ObjectPose().translation().z() - T_WO0.translation().z();
+
+  jsonf::Json biases = jsonf::Json::object();
+  for (int j = 0; j < m; ++j) biases[hand.joints[hand.q_joints[j]].name] = bias[j];
+  const Quat he(hand_eye_error.linear());
+  jsonf::Json truth = {{"joint_biases_rad", biases},
+                       {"bias_convention", "q_true = q_meas + bias"},
+                       {"hand_eye_error", jsonf::PoseToJson(hand_eye_error)},
+                       {"hand_eye_convention", "T_PC_recorded = T_PC_true * error"},
+                       {"true_initial_T_PO", jsonf::PoseToJson(T_PO0)},
+                       {"max_penetration_m", summary.max_penetration},
+                       {"held_fraction", summary.held_fraction},
+                       {"tilt_in_hand_deg", summary.tilt_in_hand_deg},
+                       {"max_in_hand_rotation_deg", summary.max_in_hand_rotation_deg},
+                       {"table_travel_before_grasp_m", summary.table_travel_before_grasp},
+                       {"lift_height_m", summary.lift_height}};
+  writer.AddFile("truth/truth.json", truth.dump(2) + "\n");
+  writer.AddFile("truth/contacts.csv", contacts_csv.str());
+  writer.Commit();
+  summary.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return summary;
+}
+
+}  // namespace inhand
