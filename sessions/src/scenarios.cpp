@@ -88,7 +88,7 @@ std::vector<Scenario> Build() {
     s.name = "brush-rotation";
     s.description = "fingertip grasp of a brush lying on the table, lift, roll it in the fingers";
     s.object = "brush";
-    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0115), ExpSO3(Vec3(0, 0, M_PI / 2)));  // handle along y, resting
+    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0312), ExpSO3(Vec3(0, 0, M_PI / 2)));  // standing on its bristles, handle along y
     // Palm facing down, fingers along +x above the handle.
     const Transform grasp = Pose(Vec3(-0.03, 0.045, 0.075), PalmAxes(Vec3(0, -1, 0), Vec3(1, 0, 0)));
     const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
