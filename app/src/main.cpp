@@ -34,6 +34,15 @@ int main(int argc, char** argv) {
   simulate_cmd->add_flag("--overwrite", simulate.overwrite, "replace an existing session directory");
   simulate_cmd->add_flag("--no-images", simulate.no_images, "joints and ground truth only (fast)");
 
+  inhand::app::ReplayCommand replay;
+  auto* replay_cmd = cli.add_subcommand("replay", "Run the estimators over a session: estimates, summary, annotated video");
+  replay_cmd->add_option("SESSION", replay.session, "session directory")->required();
+  replay_cmd->add_option("--out", replay.out, "output directory (replaced when complete)")->required();
+  replay_cmd->add_option("--modalities", replay.modalities, "comma-separated sets: j, jt (jta, jtf: visual features, to come)");
+  replay_cmd->add_option("--params", replay.params, "filter parameters (JSON, as written to params.json)");
+  replay_cmd->add_flag("--no-video", replay.no_video, "skip replay.mp4");
+  replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -43,6 +52,7 @@ int main(int argc, char** argv) {
     if (*model_cmd) return inhand::app::RunModel(model);
     if (*compare_cmd) return inhand::app::RunCompare(compare);
     if (*simulate_cmd) return inhand::app::RunSimulate(simulate);
+    if (*replay_cmd) return inhand::app::RunReplay(replay);
   } catch (const inhand::InputError& e) {
     std::cerr << "inhand: error: " << e.what() << "\n";
     return 2;

@@ -35,4 +35,14 @@ struct SimulateCommand {
 };
 int RunSimulate(const SimulateCommand& cmd);
 
+struct ReplayCommand {
+  std::string session;
+  std::string out;
+  std::string modalities;  // "" = every set the session supports
+  std::string params;      // FilterParams JSON, "" = defaults
+  bool no_video = false;
+  bool frames = false;     // also write each annotated frame as PNG
+};
+int RunReplay(const ReplayCommand& cmd);
+
 }  // namespace inhand::app

@@ -1,0 +1,80 @@
+#pragma once
+// Per-frame orchestration shared by replay and the GUI (README, "The per-frame loop"): one
+// filter per modality set over a session, stepped sample by sample, plus the pictures that
+// explain each estimate (Fig.-1 overlays, the virtual view, an external 3-D view).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "inhand/contacts/bullet_contact_query.hpp"
+#include "inhand/filter/filter.hpp"
+#include "inhand/renderer/overlay.hpp"
+#include "inhand/renderer/views.hpp"
+#include "inhand/sessions/session.hpp"
+
+namespace inhand::app {
+
+struct ModalitySet {
+  std::string name;  // j, jt, jta, jtf
+  bool torque = false;
+  bool tags = false;
+  bool features = false;
+  Rgb colour;
+};
+// Parses "j,jt,..."; throws InputError for unknown or not yet supported sets.
+std::vector<ModalitySet> ParseModalities(const std::string& list);
+// Every set this build can run on this session.
+std::vector<ModalitySet> DefaultModalities(const Session& session);
+
+struct EstimateRecord {
+  double t = 0.0;
+  Transform T_PO;
+  Vec3 sigma_position = Vec3::Zero();     // [m]
+  Vec3 sigma_orientation = Vec3::Zero();  // [rad]
+  Eigen::VectorXd biases;
+  double position_error = std::numeric_limits<double>::quiet_NaN();     // [m] when truth exists
+  double orientation_error = std::numeric_limits<double>::quiet_NaN();  // [rad]
+  double step_time_us = 0.0;
+  int constraints = 0;
+  int contacts = 0;
+};
+
+class Pipeline {
+ public:
+  Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets);
+  int num_samples() const { return session_.num_samples(); }
+  // Runs every filter on joint sample k (k = 0 initialises them).
+  void Step(int k);
+  const std::vector<ModalitySet>& sets() const { return sets_; }
+  const Filter& filter(std::size_t i) const { return *filters_[i]; }
+  const EstimateRecord& last(std::size_t i) const { return last_[i]; }
+  const Session& session() const { return session_; }
+  const SessionModels& models() const { return models_; }
+  const FilterParams& params() const { return params_; }
+
+ private:
+  Session& session_;
+  SessionModels models_;
+  FilterParams params_;
+  std::vector<ModalitySet> sets_;
+  std::vector<std::unique_ptr<BulletContactQuery>> queries_;
+  std::vector<std::unique_ptr<Filter>> filters_;
+  std::vector<EstimateRecord> last_;
+};
+
+// The annotated pictures of one camera frame: camera image with overlays | virtual view at the
+// estimate of the last set | external 3-D view.
+class FrameComposer {
+ public:
+  explicit FrameComposer(const Pipeline& pipeline);
+  Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {});
+
+ private:
+  const Pipeline& p_;
+  Renderer renderer_;
+  HandMeshes hand_meshes_;
+  std::vector<int> object_meshes_;
+  std::unique_ptr<OverlayPainter> painter_;
+};
+
+}  // namespace inhand::app

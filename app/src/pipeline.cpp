@@ -1,0 +1,157 @@
+#include "inhand/app/pipeline.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "inhand/core/error.hpp"
+#include "inhand/kinematics/kinematics.hpp"
+
+namespace inhand::app {
+
+std::vector<ModalitySet> ParseModalities(const std::string& list) {
+  std::vector<ModalitySet> out;
+  std::stringstream ss(list);
+  std::string name;
+  while (std::getline(ss, name, ',')) {
+    if (name == "j") out.push_back({"j", false, false, false, kColourJoints});
+    else if (name == "jt") out.push_back({"jt", true, false, false, kColourTorques});
+    else if (name == "jta" || name == "jtf")
+      throw InputError("--modalities: '" + name + "' (visual features) is not available in this build yet; use j,jt");
+    else throw InputError("--modalities: unknown set '" + name + "', expected j, jt, jta or jtf");
+  }
+  if (out.empty()) throw InputError("--modalities: empty list");
+  return out;
+}
+
+std::vector<ModalitySet> DefaultModalities(const Session&) { return ParseModalities("j,jt"); }
+
+Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets)
+    : session_(session), models_(LoadSessionModels(session, true)), params_(params), sets_(std::move(sets)) {
+  params_.Validate();
+  for (const ModalitySet& s : sets_) {
+    queries_.push_back(std::make_unique<BulletContactQuery>(models_.hand, models_.object));
+    filters_.push_back(std::make_unique<Filter>(models_.hand, *queries_.back(), params_, s.torque));
+  }
+  last_.resize(sets_.size());
+}
+
+void Pipeline::Step(int k) {
+  const SessionInfo& info = session_.info();
+  const double t = session_.t(k);
+  const double dt = k > 0 ? t - session_.t(k - 1) : 0.0;
+  for (std::size_t i = 0; i < filters_.size(); ++i) {
+    Filter& f = *filters_[i];
+    const auto start = std::chrono::steady_clock::now();
+    if (k == 0) f.Reset(info.initial_T_PO, session_.q(0), info.sigma_position, info.sigma_orientation, info.sigma_joint_bias);
+    f.Predict(session_.q(k), dt);
+    f.UpdateContacts(session_.tau(k));
+    const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
+    EstimateRecord& r = last_[i];
+    r.t = t;
+    r.T_PO = f.T_PO();
+    r.sigma_position = f.covariance().diagonal().head<3>().cwiseSqrt();
+    r.sigma_orientation = f.covariance().diagonal().segment<3>(3).cwiseSqrt();
+    r.biases = f.biases();
+    r.step_time_us = us;
+    r.constraints = f.trace().num_constraints;
+    r.contacts = static_cast<int>(f.trace().contacts.size());
+    if (session_.has_groundtruth()) {
+      const Transform gt = session_.GroundTruthAt(t);
+      r.position_error = (r.T_PO.translation() - gt.translation()).norm();
+      r.orientation_error = RotationDistance(r.T_PO.linear(), gt.linear());
+    }
+  }
+}
+
+namespace {
+
+OverlayContact::Kind Kind(ContactKind k) {
+  switch (k) {
+    case ContactKind::kKinematic: return OverlayContact::Kind::kKinematic;
+    case ContactKind::kTorque: return OverlayContact::Kind::kTorque;
+    case ContactKind::kRejectedCone:
+    case ContactKind::kRejectedForce: return OverlayContact::Kind::kRejected;
+    case ContactKind::kCandidate: break;
+  }
+  return OverlayContact::Kind::kCandidate;
+}
+
+}  // namespace
+
+FrameComposer::FrameComposer(const Pipeline& pipeline) : p_(pipeline) {
+  hand_meshes_ = UploadHand(renderer_, p_.models().hand);
+  object_meshes_ = UploadObject(renderer_, p_.models().object);
+  painter_ = std::make_unique<OverlayPainter>(renderer_, object_meshes_);
+}
+
+Image8 FrameComposer::Compose(int camera_frame, double t, const OverlayLayers& layers) {
+  const Session& s = p_.session();
+  const CameraFrame& frame = s.camera_frames().at(static_cast<std::size_t>(camera_frame));
+  const Intrinsics& K = *s.info().camera;
+  OverlayFrame of;
+  of.camera = s.LoadImage(camera_frame);
+  of.T_PC = frame.T_PC;
+  of.K = K;
+  of.friction_cone_deg = p_.params().friction_cone_deg;
+  std::ostringstream hud;
+  hud << std::fixed << std::setprecision(3) << "t = " << t << " s   frame " << camera_frame;
+  of.hud.push_back(hud.str());
+  if (s.has_groundtruth())
+    of.estimates.push_back({"truth", kColourTruth, s.GroundTruthAt(t), Mat3::Zero(), true, {}, {}});
+  for (std::size_t i = 0; i < p_.sets().size(); ++i) {
+    const Filter& f = p_.filter(i);
+    const EstimateRecord& r = p_.last(i);
+    OverlayEstimate e{p_.sets()[i].name, p_.sets()[i].colour, r.T_PO, f.covariance().topLeftCorner<3, 3>(), false, {}, {}};
+    for (const FilterTrace::Contact& c : f.trace().contacts)
+      e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
+    of.estimates.push_back(e);
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(1) << p_.sets()[i].name << ": ";
+    if (std::isfinite(r.position_error))
+      line << r.position_error * 1000 << " mm / " << r.orientation_error * 180 / M_PI << " deg, ";
+    line << r.constraints << " constraints";
+    of.hud.push_back(line.str());
+  }
+  const Image8 annotated = painter_->Paint(of, layers);
+
+  // The virtual view: the scene as the last set believes it, from the camera.
+  const std::size_t last = p_.sets().size() - 1;
+  const Filter& f = p_.filter(last);
+  Scene virtual_scene;
+  virtual_scene.K = K;
+  virtual_scene.T_PC = frame.T_PC;
+  virtual_scene.background = Vec3(0.12, 0.12, 0.14);
+  AddHand(virtual_scene, hand_meshes_, f.kinematics().link_poses());
+  AddObject(virtual_scene, object_meshes_, f.T_PO());
+  RenderOutput virtual_out;
+  renderer_.Render(virtual_scene, virtual_out, false);
+
+  // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
+  Scene orbit;
+  orbit.K = K;
+  orbit.background = Vec3(0.93, 0.94, 0.96);
+  const Aabb box = p_.models().object.Bounds();
+  const Vec3 centre = p_.last(last).T_PO * box.Center();
+  orbit.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), 0.42, -2.2, 0.55, Vec3::UnitY());
+  AddHand(orbit, hand_meshes_, f.kinematics().link_poses(), 1.0);
+  if (s.has_groundtruth()) {
+    ObjectStyle truth;
+    truth.rgba = Eigen::Vector4d(0.15, 0.15, 0.15, 1.0);
+    AddObject(orbit, object_meshes_, s.GroundTruthAt(t), truth);
+  }
+  for (std::size_t i = 0; i < p_.sets().size(); ++i) {
+    ObjectStyle style;
+    const Rgb& c = p_.sets()[i].colour;
+    style.rgba = Eigen::Vector4d(c.r / 255.0, c.g / 255.0, c.b / 255.0, 0.45);
+    AddObject(orbit, object_meshes_, p_.last(i).T_PO, style);
+  }
+  RenderOutput orbit_out;
+  renderer_.Render(orbit, orbit_out, false);
+  return SideBySide({&annotated, &virtual_out.colour, &orbit_out.colour},
+                    {"camera + estimates (truth dashed)", "virtual view at " + p_.sets()[last].name + " estimate",
+                     "3-D view: truth dark, estimates translucent"});
+}
+
+}  // namespace inhand::app

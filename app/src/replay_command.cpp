@@ -1,0 +1,201 @@
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iomanip>
+#include <sstream>
+
+#include "inhand/app/commands.hpp"
+#include "inhand/app/pipeline.hpp"
+#include "inhand/core/error.hpp"
+#include "inhand/io/detail/json_fields.hpp"
+#include "inhand/renderer/image_io.hpp"
+#include "inhand/renderer/video.hpp"
+
+namespace fs = std::filesystem;
+
+namespace inhand::app {
+
+namespace {
+
+using jsonf::Json;
+
+// A temporary output folder beside the target, renamed into place on success only.
+class StagedOutput {
+ public:
+  explicit StagedOutput(const std::string& out) : final_(fs::absolute(out).lexically_normal()) {
+    if (final_.filename().empty()) final_ = final_.parent_path();
+    tmp_ = final_.parent_path() / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+    fs::remove_all(tmp_);
+    std::error_code ec;
+    fs::create_directories(tmp_, ec);
+    if (ec) throw InputError(out + ": cannot create the output folder (" + ec.message() + ")");
+  }
+  ~StagedOutput() {
+    std::error_code ec;
+    if (!committed_) fs::remove_all(tmp_, ec);
+  }
+  fs::path operator/(const std::string& rel) const { return tmp_ / rel; }
+  void Commit() {
+    fs::remove_all(final_);
+    fs::rename(tmp_, final_);
+    committed_ = true;
+  }
+
+ private:
+  fs::path final_, tmp_;
+  bool committed_ = false;
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size())))];
+}
+
+struct SetStats {
+  std::vector<double> step_us;
+  double sq_pos = 0.0, sq_ori = 0.0;
+  int with_truth = 0;
+  long constraints = 0;
+  EstimateRecord last;
+};
+
+}  // namespace
+
+int RunReplay(const ReplayCommand& cmd) {
+  if (cmd.out.empty()) throw InputError("replay: --out DIR is required");
+  Session session = Session::Load(cmd.session);
+  FilterParams params;
+  if (!cmd.params.empty()) {
+    std::ifstream in(cmd.params);
+    if (!in) throw InputError(cmd.params + ": cannot open the parameter file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    params = FilterParamsFromJson(ss.str(), cmd.params);
+  }
+  const std::vector<ModalitySet> sets = cmd.modalities.empty() ? DefaultModalities(session) : ParseModalities(cmd.modalities);
+  Pipeline pipeline(session, params, sets);
+  const bool want_pictures = (!cmd.no_video || cmd.frames) && session.info().camera.has_value();
+  std::unique_ptr<FrameComposer> composer;
+  if (want_pictures) composer = std::make_unique<FrameComposer>(pipeline);
+
+  StagedOutput out(cmd.out);
+  if (cmd.frames) fs::create_directories(out / "frames");
+  std::ofstream csv(out / "estimates.csv");
+  csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,position_error_mm,orientation_error_deg";
+  for (const std::string& n : session.joint_names()) csv << ",bias:" << n;
+  csv << "\n";
+
+  std::unique_ptr<VideoWriter> video;
+  const auto& frames = session.camera_frames();
+  const double fps = frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t) : 10.0;
+  std::size_t next_frame = 0;
+  std::vector<SetStats> stats(sets.size());
+  const bool tty = ::isatty(STDERR_FILENO);
+  const auto wall_start = std::chrono::steady_clock::now();
+  const int n = session.num_samples();
+  for (int k = 0; k < n; ++k) {
+    pipeline.Step(k);
+    for (std::size_t i = 0; i < sets.size(); ++i) {
+      const EstimateRecord& r = pipeline.last(i);
+      const Quat q(r.T_PO.linear());
+      const Vec3& p = r.T_PO.translation();
+      csv << FormatDouble(r.t) << "," << sets[i].name;
+      for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.sigma_position.x(), r.sigma_position.y(),
+                       r.sigma_position.z(), r.sigma_orientation.x(), r.sigma_orientation.y(), r.sigma_orientation.z()})
+        csv << "," << FormatDouble(v);
+      csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
+          << "," << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "");
+      for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
+      csv << "\n";
+      SetStats& st = stats[i];
+      if (k > 0) st.step_us.push_back(r.step_time_us);
+      st.constraints += r.constraints;
+      if (std::isfinite(r.position_error)) {
+        st.sq_pos += r.position_error * r.position_error;
+        st.sq_ori += r.orientation_error * r.orientation_error;
+        ++st.with_truth;
+      }
+      st.last = r;
+    }
+    // Camera frames due by this sample.
+    while (next_frame < frames.size() && frames[next_frame].t <= session.t(k) + 1e-9) {
+      if (composer) {
+        const Image8 picture = composer->Compose(static_cast<int>(next_frame), session.t(k));
+        if (!cmd.no_video) {
+          if (!video) video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width, picture.height);
+          video->Write(picture);
+        }
+        if (cmd.frames) {
+          char name[64];
+          std::snprintf(name, sizeof(name), "frames/frame_%06zu.png", next_frame);
+          WriteImage((out / name).string(), picture);
+        }
+      }
+      ++next_frame;
+    }
+    if (tty && (k % 100 == 0 || k == n - 1)) {
+      const int width = 40, done = static_cast<int>(std::lround(width * double(k + 1) / n));
+      std::fprintf(stderr, "\rreplay [%s%s] %3d%%", std::string(static_cast<std::size_t>(done), '#').c_str(),
+                   std::string(static_cast<std::size_t>(width - done), ' ').c_str(), static_cast<int>(100.0 * (k + 1) / n));
+    }
+  }
+  if (tty) std::fprintf(stderr, "\n");
+  if (video) video->Close();
+  csv.close();
+
+  Json summary = {{"session", fs::absolute(cmd.session).lexically_normal().string()},
+                  {"session_name", session.info().name},
+                  {"samples", n},
+                  {"camera_frames", frames.size()},
+                  {"video", video ? "replay.mp4" : Json(nullptr)},
+                  {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
+                  {"parameters", Json::parse(FilterParamsToJson(pipeline.params()))}};
+  Json per_set = Json::object();
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const SetStats& st = stats[i];
+    Json s = {{"torque", sets[i].torque},
+              {"tags", sets[i].tags},
+              {"features", sets[i].features},
+              {"step_time_us_median", Median(st.step_us)},
+              {"step_time_us_p95", Percentile(st.step_us, 0.95)},
+              {"visual_step_ms_median", nullptr},
+              {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
+    if (st.with_truth > 0) {
+      s["terminal_position_error_mm"] = st.last.position_error * 1000;
+      s["terminal_orientation_error_deg"] = st.last.orientation_error * 180 / M_PI;
+      s["rms_position_error_mm"] = std::sqrt(st.sq_pos / st.with_truth) * 1000;
+      s["rms_orientation_error_deg"] = std::sqrt(st.sq_ori / st.with_truth) * 180 / M_PI;
+    }
+    per_set[sets[i].name] = s;
+  }
+  summary["modalities"] = per_set;
+  std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
+  std::ofstream(out / "params.json") << FilterParamsToJson(pipeline.params()) << "\n";
+  out.Commit();
+
+  std::cout << "replay of " << session.info().name << " (" << n << " samples, " << frames.size() << " frames) written to " << cmd.out << "\n";
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const Json& s = per_set[sets[i].name];
+    std::cout << "  " << sets[i].name << ": ";
+    if (s.contains("terminal_position_error_mm"))
+      std::cout << "terminal error " << std::fixed << std::setprecision(1) << s["terminal_position_error_mm"].get<double>() << " mm / "
+                << s["terminal_orientation_error_deg"].get<double>() << " deg, ";
+    std::cout << "median step " << std::setprecision(0) << s["step_time_us_median"].get<double>() << " us\n";
+  }
+  return 0;
+}
+
+}  // namespace inhand::app
