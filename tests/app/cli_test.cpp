@@ -1,9 +1,15 @@
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "inhand/renderer/image_io.hpp"
+#include "inhand/renderer/video.hpp"
 
 #include "test_support.hpp"
 
@@ -115,6 +121,100 @@ TEST(Cli, ModelRenderWritesAPreview) {
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) dark += img.pixel(x, y)[0] < 120;
   EXPECT_GT(dark, 0.05 * img.width * img.height);
+}
+
+}  // namespace
+}  // namespace inhand
+
+namespace inhand {
+namespace {
+
+// One short simulated session shared by the replay tests (no noise, 1.2 s, small images).
+// Removed when the test process ends.
+struct SessionDir {
+  std::string path = std::filesystem::temp_directory_path().string() + "/inhand-cli-test-session-" + std::to_string(::getpid());
+  ~SessionDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
+const std::string& ShortSession() {
+  static const SessionDir dir;
+  static const bool made = [] {
+    const test::CommandResult r = test::RunInhand("simulate ketchup-power-grasp --noise none --seed 2 --overwrite --out " + dir.path);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.exit_code == 0;
+  }();
+  (void)made;
+  return dir.path;
+}
+
+TEST(Cli, ReplayEndToEnd) {
+  test::TempDir dir;
+  const test::CommandResult r = test::RunInhand("replay " + ShortSession() + " --out " + (dir / "replay") + " --frames");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"estimates.csv", "summary.json", "params.json", "replay.mp4", "frames/frame_000000.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir / ("replay/" + std::string(f)))) << f;
+  std::ifstream in(dir / "replay/summary.json");
+  const Json s = Json::parse(in);
+  for (const char* set : {"j", "jt"}) {
+    const Json& m = s.at("modalities").at(set);
+    // Noise-free session: the estimate starts at the truth and stays within a few centimetres.
+    EXPECT_TRUE(std::isfinite(m.at("terminal_position_error_mm").get<double>()));
+    EXPECT_LT(m.at("terminal_position_error_mm").get<double>(), 100.0) << set;
+    EXPECT_LT(m.at("terminal_orientation_error_deg").get<double>(), 45.0) << set;
+    EXPECT_GT(m.at("step_time_us_median").get<double>(), 0.0);
+  }
+  const VideoInfo v = ProbeVideo(dir / "replay/replay.mp4");
+  EXPECT_EQ(v.frames, s.at("camera_frames").get<int>());
+  EXPECT_EQ(v.height, 480);
+}
+
+TEST(Cli, ReplayIsDeterministic) {
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "a")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "b")).exit_code, 0);
+  const auto read = [](const std::string& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  EXPECT_EQ(read(dir / "a/estimates.csv"), read(dir / "b/estimates.csv"));
+  EXPECT_GT(read(dir / "a/estimates.csv").size(), 10000u);
+}
+
+TEST(Cli, ReplayRejectsBadInputWithoutPartialOutput) {
+  test::TempDir dir;
+  // A session whose joints.csv holds a NaN.
+  std::filesystem::copy(ShortSession(), dir / "bad", std::filesystem::copy_options::recursive);
+  {
+    std::ifstream in(dir / "bad/joints.csv");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string text = ss.str();
+    const auto line3 = text.find('\n', text.find('\n', text.find('\n') + 1) + 1);
+    text.replace(text.find(',', line3 + 1) + 1, 1, "nan,");
+    std::ofstream(dir / "bad/joints.csv") << text;
+  }
+  const test::CommandResult bad = test::RunInhand("replay " + (dir / "bad") + " --out " + (dir / "out"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("joints.csv:4"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  const test::CommandResult missing = test::RunInhand("replay " + (dir / "nowhere") + " --out " + (dir / "out"));
+  EXPECT_EQ(missing.exit_code, 2);
+  const test::CommandResult sets = test::RunInhand("replay " + ShortSession() + " --modalities j,xyz --out " + (dir / "out"));
+  EXPECT_EQ(sets.exit_code, 2);
+  EXPECT_NE(sets.output.find("xyz"), std::string::npos);
+  dir.Write("p.json", "{\"contact_sigma\": -1}");
+  const test::CommandResult params = test::RunInhand("replay " + ShortSession() + " --params " + (dir / "p.json") + " --out " + (dir / "out"));
+  EXPECT_EQ(params.exit_code, 2);
+  EXPECT_NE(params.output.find("contact_sigma"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  // No temporary folders left beside the target.
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find(".out.tmp"), std::string::npos) << e.path();
 }
 
 }  // namespace
