@@ -62,24 +62,24 @@ std::vector<Scenario> Build() {
   {  // Exp. I: power grasp of a ketchup bottle, which tilts in the hand as it is lifted.
     Scenario s;
     s.name = "ketchup-power-grasp";
-    s.description = "power grasp of a ketchup bottle lying on the table, from above and off its centre of mass; lifted, it tilts in the hand";
+    s.description = "side power grasp of a standing ketchup bottle below its centre of mass; lifted, it tilts in the hand";
     s.object = "ketchup_bottle";
-    // Lying on its narrow side, axis along +x, the label (y_O face) towards the camera (-y).
-    Mat3 R_WO;
-    R_WO << Vec3(0, 0, 1), Vec3(0, -1, 0), Vec3(1, 0, 0);
-    s.T_WO = MakeTransform(Vec3(-0.10, 0.0, 0.034), R_WO);
-    // Palm facing down on the bottle, across it (thumb towards the cap), fingers down its far
-    // side (-y), the thumb on its near side; 2.5 cm towards the base from the centre of mass.
-    const Transform grasp = Pose(Vec3(-0.035, 0.054, 0.069), PalmAxes(Vec3(1, 0, 0), Vec3(0, -1, 0)));
-    const auto closed = Hand(0.0, 1.57, 0.35, 0.2, 0.3, 0.6, 0.6, 0.4);
-    s.keys = {Key(0.0, Lifted(grasp, 0.07), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
-              Key(2.2, grasp, closed, 0.9), Key(2.6, grasp, closed, 0.9),
-              Key(4.0, Lifted(grasp, 0.12), closed, 0.9), Key(5.0, Lifted(grasp, 0.12), closed, 0.7),
-              Key(6.0, Lifted(grasp, 0.12), closed, 0.7)};
+    // The bottle's wide face towards the palm, its label towards +x.
+    s.T_WO = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, M_PI / 2)));
+    // Palm facing +x, thumb up, fingers towards the camera side (-y) around the narrow side.
+    const Transform grasp = Pose(Vec3(-0.026, 0.05, 0.055), PalmAxes(Vec3(0, 0, 1), Vec3(0, -1, 0)));
+    const auto closed = Hand(0.0, 1.4, 1.3, 1.0, 0.0, 0.6, 0.6, 0.6);
+    constexpr double kGrip = 0.7, kLoose = 0.06;  // loosened for a moment: the bottle tilts
+    auto fingers_only = closed;  // fingers first, then the thumb
+    for (const char* j : {"thumb_abduction", "thumb_flex1", "thumb_flex2", "thumb_flex3"}) fingers_only[j] = open.at(j);
+    s.keys = {Key(0.0, Back(grasp, 0.07), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
+              Key(1.9, grasp, fingers_only, kGrip), Key(2.4, grasp, closed, kGrip), Key(2.6, grasp, closed, kGrip),
+              Key(4.0, Lifted(grasp, 0.12), closed, kGrip), Key(4.6, Lifted(grasp, 0.12), closed, kLoose),
+              Key(5.2, Lifted(grasp, 0.12), closed, kGrip), Key(6.0, Lifted(grasp, 0.12), closed, kGrip)};
     s.close_start = 1.2;
     s.grasp_closed = 2.6;
-    s.camera_eye = Vec3(0.25, -0.42, 0.38);
-    s.camera_target = Vec3(-0.02, 0.0, 0.08);
+    s.camera_eye = Vec3(0.30, -0.45, 0.40);
+    s.camera_target = Vec3(0.0, 0.0, 0.12);
     s.initial_error_direction_W = Vec3(0, 0, 1);  // "20 mm too high", as in Exp. I
     all.push_back(s);
   }

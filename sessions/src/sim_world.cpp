@@ -1,8 +1,17 @@
 #include "sim_world.hpp"
 
 #include <btBulletDynamicsCommon.h>
+#include <BulletDynamics/Featherstone/btMultiBody.h>
+#include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+#include <BulletDynamics/Featherstone/btMultiBodyJointLimitConstraint.h>
+#include <BulletDynamics/Featherstone/btMultiBodyJointMotor.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
 
 #include <Eigen/Eigenvalues>
+
+#include <cstdio>
+#include <cstdlib>
 
 #include "inhand/core/error.hpp"
 
@@ -11,13 +20,15 @@ namespace inhand::sim {
 namespace {
 
 constexpr double kMargin = 0.0005;  // [m] collision margin of hulls and boxes
+constexpr int kArmDofs = 6;         // x, y, z, yaw, pitch, roll
 
 btVector3 Bt(const Vec3& v) { return btVector3(v.x(), v.y(), v.z()); }
 Vec3 Ei(const btVector3& v) { return Vec3(v.x(), v.y(), v.z()); }
-btTransform Bt(const Transform& T) {
-  const Quat q(T.linear());
-  return btTransform(btQuaternion(q.x(), q.y(), q.z(), q.w()), Bt(T.translation()));
+btQuaternion BtQ(const Mat3& R) {
+  const Quat q(R);
+  return btQuaternion(q.x(), q.y(), q.z(), q.w());
 }
+btTransform Bt(const Transform& T) { return btTransform(BtQ(T.linear()), Bt(T.translation())); }
 Transform Ei(const btTransform& T) {
   const btQuaternion q = T.getRotation();
   return MakeTransform(Ei(T.getOrigin()), Quat(q.w(), q.x(), q.y(), q.z()));
@@ -44,13 +55,13 @@ std::pair<btCollisionShape*, btTransform> MakeChild(const ConvexPiece& p, const 
     }
     case ConvexPiece::Kind::kHull: {
       auto* h = new btConvexHullShape();
-      // Shrink by the margin so the inflated hull matches the true surface.
+      // Shrunk by the margin, so that the inflated hull is the true surface.
       Vec3 c = Vec3::Zero();
       for (const Vec3& v : p.hull_vertices) c += v;
       c /= static_cast<double>(p.hull_vertices.size());
+      const Vec3 cl = T_body_frame_inv * c;
       for (const Vec3& v : p.hull_vertices) {
         const Vec3 local = T_body_frame_inv * v;
-        const Vec3 cl = T_body_frame_inv * c;
         const double len = (local - cl).norm();
         h->addPoint(Bt(len > kMargin ? Vec3(cl + (local - cl) * (1.0 - kMargin / len)) : local), false);
       }
@@ -64,42 +75,43 @@ std::pair<btCollisionShape*, btTransform> MakeChild(const ConvexPiece& p, const 
   return {shape, Bt(T)};
 }
 
+double Unwrap(double angle, double reference) {
+  while (angle - reference > M_PI) angle -= 2 * M_PI;
+  while (angle - reference < -M_PI) angle += 2 * M_PI;
+  return angle;
+}
+
 }  // namespace
 
 struct World::Impl {
+  const HandModel& hand;
   btDefaultCollisionConfiguration config;
   btCollisionDispatcher dispatcher{&config};
   btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
+  btMultiBodyConstraintSolver solver;
+  btMultiBodyDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
-  std::vector<std::unique_ptr<btDefaultMotionState>> states;
-  std::vector<std::unique_ptr<btRigidBody>> bodies;
-  std::vector<int> link_body;  // body index per link, -1 without collision
-  btRigidBody* object = nullptr;
-  btRigidBody* table = nullptr;
-  Transform T_OB = Transform::Identity();  // object body frame (COM, principal axes) in O
-  double last_dt = 0.001;
-
-  btRigidBody* AddBody(btCollisionShape* shape, double mass, const Vec3& inertia, const Transform& T, int index) {
-    states.push_back(std::make_unique<btDefaultMotionState>(Bt(T)));
-    btRigidBody::btRigidBodyConstructionInfo info(mass, states.back().get(), shape, Bt(inertia));
-    bodies.push_back(std::make_unique<btRigidBody>(info));
-    btRigidBody* b = bodies.back().get();
-    b->setUserIndex(index);
-    world.addRigidBody(b);
-    return b;
-  }
+  std::unique_ptr<btDefaultMotionState> object_state, table_state;
+  std::unique_ptr<btRigidBody> object, table;
+  std::unique_ptr<btMultiBody> mb;
+  std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
+  std::vector<std::unique_ptr<btMultiBodyJointMotor>> motors;  // arm first, then hand q order
+  std::vector<std::unique_ptr<btMultiBodyJointLimitConstraint>> limits;
+  std::vector<int> q_link;      // multibody link of each hand q entry
+  std::vector<int> link_of;     // multibody link of each hand link (-1: the palm is link 5)
+  Transform T_OB = Transform::Identity();
+  Vec3 last_rpy = Vec3::Zero();
+  explicit Impl(const HandModel& h) : hand(h) {}
 };
 
-World::World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links)
-    : impl_(std::make_unique<Impl>()) {
+World::World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
+             const Transform& T_WP0, const Eigen::VectorXd& q0)
+    : impl_(std::make_unique<Impl>(hand)) {
   Impl& w = *impl_;
   w.world.setGravity(btVector3(0, 0, -9.81));
   btContactSolverInfo& si = w.world.getSolverInfo();
-  si.m_numIterations = 60;
+  si.m_numIterations = 80;
   si.m_splitImpulse = true;
-  si.m_splitImpulsePenetrationThreshold = -0.0002;
   si.m_erp = 0.2;
   si.m_erp2 = 0.4;
 
@@ -107,8 +119,11 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   auto* table_shape = new btBoxShape(btVector3(0.6, 0.4, 0.025));
   table_shape->setMargin(kMargin);
   w.shapes.emplace_back(table_shape);
-  w.table = w.AddBody(table_shape, 0.0, Vec3::Zero(), MakeTransform(Vec3(0, 0, -0.025), Mat3::Identity()), -2);
+  w.table_state = std::make_unique<btDefaultMotionState>(btTransform(btQuaternion::getIdentity(), btVector3(0, 0, -0.025)));
+  w.table = std::make_unique<btRigidBody>(btRigidBody::btRigidBodyConstructionInfo(0.0, w.table_state.get(), table_shape));
   w.table->setFriction(0.5);
+  w.table->setUserIndex(-2);
+  w.world.addRigidBody(w.table.get());
 
   // Object: body frame at the centre of mass along the principal axes.
   Eigen::SelfAdjointEigenSolver<Mat3> eig(object.inertia_com);
@@ -117,25 +132,59 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   w.T_OB = MakeTransform(object.com_O, axes);
   auto* compound = new btCompoundShape();
   w.shapes.emplace_back(compound);
-  const Transform T_BO = w.T_OB.inverse();
   for (const ConvexPiece& p : object.pieces) {
-    auto [shape, T] = MakeChild(p, T_BO);
+    auto [shape, T] = MakeChild(p, w.T_OB.inverse());
     w.shapes.emplace_back(shape);
     compound->addChildShape(T, shape);
   }
-  w.object = w.AddBody(compound, object.mass, eig.eigenvalues().cwiseMax(1e-9), T_WO * w.T_OB, -1);
+  w.object_state = std::make_unique<btDefaultMotionState>(Bt(T_WO * w.T_OB));
+  w.object = std::make_unique<btRigidBody>(btRigidBody::btRigidBodyConstructionInfo(
+      object.mass, w.object_state.get(), compound, Bt(eig.eigenvalues().cwiseMax(1e-9))));
   w.object->setFriction(object.friction);
-  w.object->setRollingFriction(0.0005);
-  w.object->setSpinningFriction(0.0005);
+  w.object->setRollingFriction(0.001);
+  w.object->setSpinningFriction(0.001);
   w.object->setActivationState(DISABLE_DEACTIVATION);
-  w.object->setDamping(0.05, 0.1);
-  w.object->setCcdMotionThreshold(0.005);
-  w.object->setCcdSweptSphereRadius(0.005);
+  w.object->setUserIndex(-1);
+  w.world.addRigidBody(w.object.get());
 
-  // Hand links: kinematic compounds, poses set every step.
-  w.link_body.assign(hand.links.size(), -1);
+  // The multibody: 6 arm joints, the palm as the last arm link, then the hand's links.
+  const int hand_links = static_cast<int>(hand.links.size()) - 1;  // all but the root
+  const int num_links = kArmDofs + hand_links;
+  w.mb = std::make_unique<btMultiBody>(num_links, 0.0, btVector3(0, 0, 0), true, false);
+  w.mb->setHasSelfCollision(false);
+  const btQuaternion id = btQuaternion::getIdentity();
+  const btVector3 zero(0, 0, 0), small(1e-3, 1e-3, 1e-3);
+  w.mb->setupPrismatic(0, 2.0, small, -1, id, btVector3(1, 0, 0), zero, zero, true);
+  w.mb->setupPrismatic(1, 2.0, small, 0, id, btVector3(0, 1, 0), zero, zero, true);
+  w.mb->setupPrismatic(2, 2.0, small, 1, id, btVector3(0, 0, 1), zero, zero, true);
+  w.mb->setupRevolute(3, 1.0, small, 2, id, btVector3(0, 0, 1), zero, zero, true);
+  w.mb->setupRevolute(4, 1.0, small, 3, id, btVector3(0, 1, 0), zero, zero, true);
+  w.mb->setupRevolute(5, 0.5, Bt(Vec3(4e-4, 4e-4, 6e-4)), 4, id, btVector3(1, 0, 0), zero, zero, true);
+  w.link_of.assign(hand.links.size(), -1);
+  w.link_of[static_cast<std::size_t>(hand.root_link)] = 5;
+  int next = kArmDofs;
+  for (const Joint& joint : hand.joints) {  // topological: parents first
+    const int link = next++;
+    w.link_of[static_cast<std::size_t>(joint.child_link)] = link;
+    const int parent = w.link_of[static_cast<std::size_t>(joint.parent_link)];
+    const double mass = 0.02;
+    const btQuaternion rot = BtQ(joint.T_LJ.linear().transpose());
+    const btVector3 offset = Bt(joint.T_LJ.translation());
+    if (joint.type == JointType::kFixed) {
+      w.mb->setupFixed(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, offset, zero, true);
+    } else if (joint.type == JointType::kPrismatic) {
+      w.mb->setupPrismatic(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, Bt(joint.axis), offset, zero, true);
+    } else {
+      w.mb->setupRevolute(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, Bt(joint.axis), offset, zero, true);
+    }
+  }
+  w.mb->finalizeMultiDof();
+  w.world.addMultiBody(w.mb.get());
+
+  // Colliders: the palm on arm link 5, every hand link with geometry on its multibody link.
   for (std::size_t l = 0; l < hand.links.size(); ++l) {
     if (hand.links[l].collision.empty()) continue;
+    const int link = w.link_of[l];
     auto* c = new btCompoundShape();
     w.shapes.emplace_back(c);
     for (const ConvexPiece& p : hand.links[l].collision) {
@@ -143,29 +192,92 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
       w.shapes.emplace_back(shape);
       c->addChildShape(T, shape);
     }
-    btRigidBody* b = w.AddBody(c, 0.0, Vec3::Zero(), Transform::Identity(), static_cast<int>(l));
-    b->setCollisionFlags(b->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
-    b->setActivationState(DISABLE_DEACTIVATION);
-    b->setFriction(friction_links);
-    w.link_body[l] = static_cast<int>(w.bodies.size()) - 1;
+    auto collider = std::make_unique<btMultiBodyLinkCollider>(w.mb.get(), link);
+    collider->setCollisionShape(c);
+    collider->setFriction(friction_links);
+    collider->setUserIndex(static_cast<int>(l));
+    w.world.addCollisionObject(collider.get(), btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter);
+    w.mb->getLink(link).m_collider = collider.get();
+    w.colliders.push_back(std::move(collider));
   }
+
+  // Constraints are solved per simulation island, found through link colliders: links without
+  // geometry get a collider that collides with nothing, or their motors would be ignored.
+  auto* ghost_shape = new btSphereShape(0.001);
+  w.shapes.emplace_back(ghost_shape);
+  for (int link = 0; link < num_links; ++link) {
+    if (w.mb->getLink(link).m_collider != nullptr) continue;
+    auto collider = std::make_unique<btMultiBodyLinkCollider>(w.mb.get(), link);
+    collider->setCollisionShape(ghost_shape);
+    collider->setUserIndex(-3);
+    w.world.addCollisionObject(collider.get(), 0, 0);
+    w.mb->getLink(link).m_collider = collider.get();
+    w.colliders.push_back(std::move(collider));
+  }
+
+  // Motors and joint limits.
+  for (int i = 0; i < kArmDofs; ++i) {
+    w.motors.push_back(std::make_unique<btMultiBodyJointMotor>(w.mb.get(), i, 0.0, 500.0));
+    w.motors.back()->setErp(1.0);
+    w.world.addMultiBodyConstraint(w.motors.back().get());
+  }
+  for (int j : hand.q_joints) w.q_link.push_back(w.link_of[static_cast<std::size_t>(hand.joints[static_cast<std::size_t>(j)].child_link)]);
+  for (int i = 0; i < hand.num_q(); ++i) {
+    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    w.motors.push_back(std::make_unique<btMultiBodyJointMotor>(w.mb.get(), w.q_link[static_cast<std::size_t>(i)], 0.0, 0.001));
+    w.motors.back()->setErp(1.0);
+    w.world.addMultiBodyConstraint(w.motors.back().get());
+    if (joint.has_limits) {
+      w.limits.push_back(std::make_unique<btMultiBodyJointLimitConstraint>(w.mb.get(), w.q_link[static_cast<std::size_t>(i)], joint.lower, joint.upper));
+      w.world.addMultiBodyConstraint(w.limits.back().get());
+    }
+  }
+
+  // Initial state.
+  const Vec3 rpy = RpyFromRotation(T_WP0.linear());
+  w.last_rpy = rpy;
+  const double arm[kArmDofs] = {T_WP0.translation().x(), T_WP0.translation().y(), T_WP0.translation().z(), rpy.z(), rpy.y(), rpy.x()};
+  for (int i = 0; i < kArmDofs; ++i) w.mb->setJointPos(i, arm[i]);
+  for (int i = 0; i < hand.num_q(); ++i) w.mb->setJointPos(w.q_link[static_cast<std::size_t>(i)], q0[i]);
+  btAlignedObjectArray<btQuaternion> scratch_q;
+  btAlignedObjectArray<btVector3> scratch_m;
+  w.mb->forwardKinematics(scratch_q, scratch_m);
+  w.mb->updateCollisionObjectWorldTransforms(scratch_q, scratch_m);
+  SetTargets(T_WP0, q0, Eigen::VectorXd::Constant(hand.num_q(), 0.1));
 }
 
 World::~World() {
-  for (auto& b : impl_->bodies) impl_->world.removeRigidBody(b.get());
+  Impl& w = *impl_;
+  for (auto& m : w.motors) w.world.removeMultiBodyConstraint(m.get());
+  for (auto& l : w.limits) w.world.removeMultiBodyConstraint(l.get());
+  for (auto& c : w.colliders) w.world.removeCollisionObject(c.get());
+  w.world.removeMultiBody(w.mb.get());
+  w.world.removeRigidBody(w.object.get());
+  w.world.removeRigidBody(w.table.get());
 }
 
-void World::SetLinkPoses(const std::vector<Transform>& T_WL) {
-  for (std::size_t l = 0; l < impl_->link_body.size(); ++l) {
-    const int b = impl_->link_body[l];
-    if (b < 0) continue;
-    impl_->states[static_cast<std::size_t>(b)]->setWorldTransform(Bt(T_WL[l]));
+void World::SetTargets(const Transform& T_WP, const Eigen::VectorXd& q_target, const Eigen::VectorXd& tau_max) {
+  Impl& w = *impl_;
+  Vec3 rpy = RpyFromRotation(T_WP.linear());
+  for (int k = 0; k < 3; ++k) rpy[k] = Unwrap(rpy[k], w.last_rpy[k]);
+  w.last_rpy = rpy;
+  const double arm[kArmDofs] = {T_WP.translation().x(), T_WP.translation().y(), T_WP.translation().z(), rpy.z(), rpy.y(), rpy.x()};
+  for (int i = 0; i < kArmDofs; ++i) {
+    w.motors[static_cast<std::size_t>(i)]->setPositionTarget(arm[i], 0.5);
+    w.motors[static_cast<std::size_t>(i)]->setVelocityTarget(0.0, 0.5);
+  }
+  last_tau_max_ = tau_max;
+  for (int i = 0; i < w.hand.num_q(); ++i) {
+    btMultiBodyJointMotor& m = *w.motors[static_cast<std::size_t>(kArmDofs + i)];
+    m.setPositionTarget(q_target[i], 0.2);
+    m.setVelocityTarget(0.0, 0.3);
   }
 }
 
 void World::Step(double dt) {
   Impl& w = *impl_;
-  w.last_dt = dt;
+  for (int i = 0; i < w.hand.num_q(); ++i)
+    w.motors[static_cast<std::size_t>(kArmDofs + i)]->setMaxAppliedImpulse(last_tau_max_[i] * dt);
   w.world.stepSimulation(dt, 0, dt);
   contacts_.clear();
   touches_table_ = false;
@@ -174,10 +286,11 @@ void World::Step(double dt) {
     btPersistentManifold* m = w.dispatcher.getManifoldByIndexInternal(i);
     const btCollisionObject* a = m->getBody0();
     const btCollisionObject* b = m->getBody1();
-    const bool a_obj = a == w.object, b_obj = b == w.object;
+    const bool a_obj = a == w.object.get(), b_obj = b == w.object.get();
+    if (std::getenv("INHAND_SIM_DEBUG2") && m->getNumContacts() > 0) std::fprintf(stderr, "manifold %d-%d n=%d\n", a->getUserIndex(), b->getUserIndex(), m->getNumContacts());
     if (!a_obj && !b_obj) continue;
     const btCollisionObject* other = a_obj ? b : a;
-    if (other == w.table) {
+    if (other == w.table.get()) {
       for (int k = 0; k < m->getNumContacts(); ++k)
         if (m->getContactPoint(k).getDistance() < 0.001) touches_table_ = true;
       continue;
@@ -186,7 +299,7 @@ void World::Step(double dt) {
     if (link < 0) continue;
     for (int k = 0; k < m->getNumContacts(); ++k) {
       const btManifoldPoint& pt = m->getContactPoint(k);
-      // The solver applied these impulses to body 0 (normal points from body 1 to body 0).
+      // Impulses the solver applied to body 0 (the normal points from body 1 to body 0).
       const Vec3 impulse_on_0 = Ei(pt.m_normalWorldOnB) * pt.m_appliedImpulse +
                                 Ei(pt.m_lateralFrictionDir1) * pt.m_appliedImpulseLateral1 +
                                 Ei(pt.m_lateralFrictionDir2) * pt.m_appliedImpulseLateral2;
@@ -198,6 +311,18 @@ void World::Step(double dt) {
       contacts_.push_back(c);
     }
   }
+}
+
+Eigen::VectorXd World::JointPositions() const {
+  Eigen::VectorXd q(impl_->hand.num_q());
+  for (int i = 0; i < q.size(); ++i) q[i] = impl_->mb->getJointPos(impl_->q_link[static_cast<std::size_t>(i)]);
+  return q;
+}
+
+Transform World::PalmPose() const {
+  const btMultiBody& mb = *impl_->mb;
+  const Vec3 p(mb.getJointPos(0), mb.getJointPos(1), mb.getJointPos(2));
+  return MakeTransform(p, RotationFromRpy(Vec3(mb.getJointPos(5), mb.getJointPos(4), mb.getJointPos(3))));
 }
 
 Transform World::ObjectPose() const {

@@ -1,6 +1,9 @@
 #pragma once
-// Internal: the Bullet dynamics world of the simulator (hand links as kinematic bodies, the
-// object as a dynamic body, a static table).
+// Internal: the Bullet dynamics world of the simulator. The arm and the hand form one
+// Featherstone multibody on a fixed base: three prismatic and three revolute arm joints carry
+// the palm along its scripted trajectory (stiff motors), and every hand joint has a motor with a
+// position target and a bounded impulse (torque limit × Δt): a torque-limited position-controlled
+// hand. The object is a dynamic rigid body, the table static.
 #include <memory>
 #include <vector>
 
@@ -18,14 +21,18 @@ struct LinkContact {
 
 class World {
  public:
-  World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links);
+  World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
+        const Transform& T_WP0, const Eigen::VectorXd& q0);
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
-  // Places the hand's links (kinematic: Bullet derives their velocities from the motion).
-  void SetLinkPoses(const std::vector<Transform>& T_WL);
+  // Motor targets for the next step: palm pose (reached stiffly) and hand joints (reached
+  // within the torque limits).
+  void SetTargets(const Transform& T_WP, const Eigen::VectorXd& q_target, const Eigen::VectorXd& tau_max);
   void Step(double dt);
+  Eigen::VectorXd JointPositions() const;  // hand joints, model order
+  Transform PalmPose() const;              // T_WP as simulated
   Transform ObjectPose() const;  // T_WO
   Vec3 ObjectLinearVelocity() const;
   // Contacts between links and the object after the last step, with the forces the links
@@ -38,6 +45,7 @@ class World {
   std::unique_ptr<Impl> impl_;
   std::vector<LinkContact> contacts_;
   bool touches_table_ = false;
+  Eigen::VectorXd last_tau_max_;
 };
 
 }  // namespace inhand::sim

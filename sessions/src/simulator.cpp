@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -193,12 +194,6 @@ Vec3 RandomUnit(std::mt19937& rng) {
   return Vec3(n(rng), n(rng), n(rng)).normalized();
 }
 
-// Joint admittance (see simulator.hpp).
-struct JointController {
-  double stiffness = 3.0;  // [N m/rad]
-  double damping = 0.15;   // [N m s/rad]
-};
-
 }  // namespace
 
 SimulationSummary Simulate(const SimulateOptions& opt) {
@@ -253,9 +248,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     for (std::size_t l = 0; l < hand.links.size(); ++l) T_WL[l] = T_WP * kin.T_PL(static_cast<int>(l));
   };
   const Transform T_WO0 = scenario->T_WO;
-  sim::World world(hand, object, T_WO0, 1.5);  // rubber-like finger surfaces
+  sim::World world(hand, object, T_WO0, 1.5, sim::PalmAt(*scenario, 0.0), q);  // rubber-like fingers
   place_links(sim::PalmAt(*scenario, 0.0));
-  world.SetLinkPoses(T_WL);
 
   // Camera fixed in the world, looking at the workspace.
   Intrinsics K;
@@ -359,28 +353,25 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   bool have_grasp = false;
   int held = 0, after_grasp = 0;
   Vec3 p_WO_close = T_WO0.translation();
-  const JointController ctrl;
   cv::RNG pixel_rng(opt.seed * 104729u + 3u);
 
   for (int k = 0; k <= steps; ++k) {
     const double t = k * dt;
-    const Transform T_WP = sim::PalmAt(*scenario, t);
-    // Joint admittance towards the targets with bounded motor torque.
+    const Transform T_WP_script = sim::PalmAt(*scenario, t);
+    // Motor targets: the palm along its script, the joints within their torque limits.
     const auto targets = sim::TargetsAt(*scenario, t, &grip);
+    Eigen::VectorXd q_target(m), tau_max(m);
     for (int j = 0; j < m; ++j) {
       const Joint& joint = hand.joints[hand.q_joints[j]];
       const auto it = targets.find(joint.name);
-      const double target = it == targets.end() ? q[j] : it->second;
-      const double tau_max = std::max(joint.effort_limit, 0.1) * grip;
-      const double tau_motor = std::clamp(ctrl.stiffness * (target - q[j]), -tau_max, tau_max);
-      double qd = (tau_motor - tau_filtered[j]) / ctrl.damping;
-      const double vmax = joint.velocity_limit > 0 ? joint.velocity_limit : 3.0;
-      qd = std::clamp(qd, -vmax, vmax);
-      q[j] = std::clamp(q[j] + qd * dt, joint.lower, joint.upper);
+      q_target[j] = it == targets.end() ? q[j] : it->second;
+      tau_max[j] = std::max(joint.effort_limit, 0.1) * grip;
     }
-    place_links(T_WP);
-    world.SetLinkPoses(T_WL);
+    world.SetTargets(T_WP_script, q_target, tau_max);
     world.Step(dt);
+    q = world.JointPositions();
+    const Transform T_WP = world.PalmPose();
+    place_links(T_WP);
 
     // Contact torques from the solver's impulses: τ = Σ J(c)ᵀ λ, λ in the palm frame.
     tau_contact.setZero();
@@ -394,6 +385,20 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
 
     const Transform T_WO = world.ObjectPose();
     const Transform T_PO = T_PW * T_WO;
+    if (std::getenv("INHAND_SIM_DEBUG") && k % 100 == 0) {
+      Vec3 F = Vec3::Zero();
+      std::map<int, int> per_link;
+      for (const sim::LinkContact& c : world.contacts()) F += c.force_W, per_link[c.link]++;
+      std::fprintf(stderr, "t=%.2f contacts=%zu F=(%.1f %.1f %.1f) z=%.4f table=%d q:", t, world.contacts().size(), F.x(), F.y(), F.z(),
+                   T_WO.translation().z(), world.ObjectTouchesTable());
+      for (int j : {1,2,3,5,6,13,14,15}) std::fprintf(stderr, " %.2f", q[j]);
+      std::fprintf(stderr, " palm=(%.3f %.3f %.3f) script=(%.3f %.3f %.3f) rot_err=%.3f", T_WP.translation().x(), T_WP.translation().y(), T_WP.translation().z(),
+                   T_WP_script.translation().x(), T_WP_script.translation().y(), T_WP_script.translation().z(), RotationDistance(T_WP.linear(), T_WP_script.linear()));
+      std::fprintf(stderr, " tau:");
+      for (int j : {1,2,3,5,6,13,14,15}) std::fprintf(stderr, " %.2f", tau_filtered[j]);
+      for (auto [l, n] : per_link) std::fprintf(stderr, " %s:%d", hand.links[l].name.c_str(), n);
+      std::fprintf(stderr, "\n");
+    }
     if (t <= scenario->close_start + 1e-9) p_WO_close = T_WO.translation();
 
     if (k % joint_every == 0) {
@@ -413,16 +418,20 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
         touching += p.distance < 0.001;
         contacts_csv << FormatDouble(t) << "," << hand.links[p.link].name << "," << FormatDouble(p.distance) << ",0\n";
       }
-      if (t >= scenario->grasp_closed) {
+      // In-hand rotation: the object's orientation in the palm frame since the fingers began
+      // to close (what closing, lifting and manipulating did to it).
+      if (t >= scenario->close_start) {
         if (!have_grasp) {
           T_PO_grasp = T_PO;
           have_grasp = true;
         }
-        ++after_grasp;
-        held += touching >= 2;
         const double rot = RotationDistance(T_PO.linear(), T_PO_grasp.linear()) * 180.0 / M_PI;
         summary.max_in_hand_rotation_deg = std::max(summary.max_in_hand_rotation_deg, rot);
         summary.tilt_in_hand_deg = rot;
+      }
+      if (t >= scenario->grasp_closed) {
+        ++after_grasp;
+        held += touching >= 2;
       }
     }
     if (opt.images && k % camera_every == 0) {

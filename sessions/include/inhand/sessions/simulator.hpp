@@ -51,7 +51,7 @@ struct SimulationSummary {
   int camera_frames = 0;
   double max_penetration = 0.0;      // [m] deepest finger/object penetration while recorded
   double held_fraction = 0.0;        // share of samples after the grasp with >= 2 links touching
-  double tilt_in_hand_deg = 0.0;     // object rotation in the palm frame, grasp → end
+  double tilt_in_hand_deg = 0.0;     // object rotation in the palm frame, closing start → end
   double max_in_hand_rotation_deg = 0.0;
   double table_travel_before_grasp = 0.0;  // [m] object motion on the table before closing
   double lift_height = 0.0;          // [m] object height gain, start → end
