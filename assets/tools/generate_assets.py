@@ -464,7 +464,7 @@ def water():
         "description": "0.5 l water bottle: clear body (mostly transparent), opaque blue cap",
         "visual": [{"mesh": "water_bottle.obj"}],
         "collision": [{"mesh": "water_bottle_pieces.obj", "method": "components"}],
-        "mass": 0.53, "friction": 0.5,
+        "mass": 0.53, "friction": 0.8,
         "tags": [{"family": "tag36h11", "id": 3, "size": 0.028, "pose": tag_pose_front(-r - 0.0006, 0.09, -1)},
                  {"family": "tag36h11", "id": 4, "size": 0.028, "pose": tag_pose_front(r + 0.0006, 0.09, +1)}],
     })
@@ -510,7 +510,7 @@ def shampoo():
         "description": "Free-form shampoo bottle: curved, waisted, leaning profile; 250 ml",
         "visual": [{"mesh": "shampoo_bottle.obj"}],
         "collision": [{"mesh": "shampoo_bottle_pieces.obj", "method": "components"}],
-        "mass": 0.30, "friction": 0.6,
+        "mass": 0.30, "friction": 0.8,
         "tags": [{"family": "tag36h11", "id": 5, "size": 0.026,
                   "pose": {"xyz": [0.003, -0.0262, 0.115], "rpy": [math.pi / 2, 0.0, 0.0]}},
                  {"family": "tag36h11", "id": 10, "size": 0.026,

@@ -86,11 +86,11 @@ std::vector<Scenario> Build() {
   {  // Exp. II: fingertip grasp of a brush, then rolled in the hand by the thumb and the index.
     Scenario s;
     s.name = "brush-rotation";
-    s.description = "fingertip grasp of a brush lying on the table, lift, roll it in the fingers";
+    s.description = "fingertip grasp of a brush's handle from above (index under, thumb on top), lift, roll it in the fingers";
     s.object = "brush";
-    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0312), ExpSO3(Vec3(0, 0, M_PI / 2)));  // standing on its bristles, handle along y
-    // Palm facing down, fingers along +x above the handle.
-    const Transform grasp = Pose(Vec3(-0.03, 0.045, 0.075), PalmAxes(Vec3(0, -1, 0), Vec3(1, 0, 0)));
+    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0312), ExpSO3(Vec3(0, 0, M_PI / 2)));  // on its bristles, handle along y
+    // Palm down, fingers along +x across the handle; index and thumb tips meet around it.
+    const Transform grasp = Pose(Vec3(-0.097, -0.036, 0.083), PalmAxes(Vec3(0, 1, 0), Vec3(1, 0, 0)));
     const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
     auto roll_a = pinch, roll_b = pinch;
     roll_a["index_flex1"] += 0.25, roll_a["thumb_flex1"] -= 0.25;
@@ -106,46 +106,58 @@ std::vector<Scenario> Build() {
   {  // Exp. III: push a mostly transparent water bottle along the table, then grasp it.
     Scenario s;
     s.name = "water-push-grasp";
-    s.description = "push a water bottle along the table with the palm, then power-grasp and lift it";
+    s.description = "push a standing water bottle 6 cm along the table with the palm, then power-grasp and lift it";
     s.object = "water_bottle";
     const Mat3 R = PalmAxes(Vec3(0, 0, 1), Vec3(0, -1, 0));
-    const Transform touch = Pose(Vec3(-0.036, 0.08, 0.07), R);
+    const Transform touch = Pose(Vec3(-0.035, 0.05, 0.055), R);
     Transform pushed = touch;
     pushed.translation().x() += 0.06;
-    const auto closed = Hand(0.0, 1.4, 1.5, 1.2, 0.6, 0.9, 1.0, 0.8);
-    s.keys = {Key(0.0, Back(touch, 0.06), open), Key(0.8, Back(touch, 0.01), open), Key(2.2, pushed, open),
-              Key(2.4, pushed, open), Key(3.4, pushed, closed, 0.6), Key(3.7, pushed, closed, 0.6),
-              Key(5.0, Lifted(pushed, 0.12), closed, 0.6), Key(6.0, Lifted(pushed, 0.12), closed, 0.6)};
-    s.close_start = 2.4;
-    s.grasp_closed = 3.7;
+    const auto closed = Hand(0.0, 1.4, 1.3, 1.0, 0.0, 0.6, 0.6, 0.6);
+    auto fingers_only = closed;
+    for (const char* j : {"thumb_abduction", "thumb_flex1", "thumb_flex2", "thumb_flex3"}) fingers_only[j] = open.at(j);
+    s.keys = {Key(0.0, Back(touch, 0.06), open), Key(1.0, Back(touch, 0.005), open), Key(2.4, pushed, open),
+              Key(2.6, pushed, open), Key(3.3, pushed, fingers_only, 0.7), Key(3.8, pushed, closed, 0.7),
+              Key(4.0, pushed, closed, 0.7), Key(5.4, Lifted(pushed, 0.12), closed, 0.7), Key(6.2, Lifted(pushed, 0.12), closed, 0.7)};
+    s.close_start = 2.6;
+    s.grasp_closed = 4.0;
     s.camera_target = Vec3(0.04, 0.0, 0.12);
     all.push_back(s);
   }
   {  // Exp. IV: a free-form shampoo bottle in a grasp that is neither power nor fingertip.
     Scenario s;
     s.name = "shampoo-grasp";
-    s.description = "grasp a free-form shampoo bottle with fingers and thumb from above its middle, lift and turn";
+    s.description = "grasp a free-form shampoo bottle with the middle phalanges and the thumb, neither power nor fingertip grasp; lift and turn";
     s.object = "shampoo_bottle";
+    s.T_WO = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, M_PI / 2)));  // wide side towards the palm
     const Mat3 R = PalmAxes(Vec3(0, 0, 1), Vec3(0, -1, 0));
-    const Transform grasp = Pose(Vec3(-0.047, 0.08, 0.10), R);
-    const auto closed = Hand(0.05, 0.9, 1.3, 1.0, 0.7, 0.8, 0.9, 0.7);
+    // Fingers half closed on the wide side: the middle phalanges and the thumb hold it.
+    const Transform grasp = Pose(Vec3(-0.028, 0.045, 0.09), R);
+    const auto closed = Hand(0.05, 1.2, 1.0, 0.9, 0.0, 0.6, 0.6, 0.6);
+    auto fingers_only = closed;
+    for (const char* j : {"thumb_abduction", "thumb_flex1", "thumb_flex2", "thumb_flex3"}) fingers_only[j] = open.at(j);
     Transform turned = Lifted(grasp, 0.10);
-    turned.linear() = ExpSO3(Vec3(0, 0, 0.35)) * turned.linear();
+    turned.linear() = ExpSO3(Vec3(0, 0, 0.4)) * turned.linear();
     s.keys = {Key(0.0, Back(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
-              Key(2.2, grasp, closed, 0.7), Key(2.5, grasp, closed, 0.7), Key(4.0, Lifted(grasp, 0.10), closed, 0.7),
-              Key(5.2, turned, closed, 0.7), Key(6.0, turned, closed, 0.7)};
+              Key(1.9, grasp, fingers_only, 0.7), Key(2.4, grasp, closed, 0.7), Key(2.6, grasp, closed, 0.7),
+              Key(4.0, Lifted(grasp, 0.10), closed, 0.7), Key(5.2, turned, closed, 0.7), Key(6.0, turned, closed, 0.7)};
     s.close_start = 1.2;
-    s.grasp_closed = 2.5;
+    s.grasp_closed = 2.6;
     all.push_back(s);
   }
-  {  // Exp. V: fingertip grasp of a pen lying on the table, rolled twice back and forth.
+  {  // Exp. V: fingertip grasp of a pen lying on a book, rolled twice back and forth.
     Scenario s;
     s.name = "pen-fingertip";
-    s.description = "fingertip grasp of a pen lying on the table, lift, roll it twice back and forth";
+    s.description = "fingertip grasp of a pen lying on a book, its end over the edge; lift, roll it twice back and forth";
     s.object = "pen";
-    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0055), ExpSO3(Vec3(0, 0, M_PI / 2)));
-    const Transform grasp = Pose(Vec3(-0.035, 0.02, 0.07), PalmAxes(Vec3(0, -1, 0), Vec3(1, 0, 0)));
-    const auto pinch = Hand(0.0, 1.0, 1.0, 0.5, 1.0, 0.6, 0.5, 0.5);
+    Scenario::Prop book;
+    book.T_W = MakeTransform(Vec3(0.07, 0.0, 0.0125), Mat3::Identity());
+    book.half_extents = Vec3(0.10, 0.075, 0.0125);  // its edge at x = -0.03
+    book.rgba = Eigen::Vector4d(0.15, 0.35, 0.55, 1.0);
+    s.props.push_back(book);
+    s.T_WO = MakeTransform(Vec3(0.005, 0.0, 0.025 + 0.0055), Mat3::Identity());  // along x, 3.75 cm over the edge
+    // Palm down, fingers along -y across the pen; index under, thumb on top, 2 cm from its end.
+    const Transform grasp = Pose(Vec3(-0.077, 0.097, 0.0825), PalmAxes(Vec3(1, 0, 0), Vec3(0, -1, 0)));
+    const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
     auto roll_a = pinch, roll_b = pinch;
     roll_a["index_flex1"] += 0.2, roll_a["thumb_flex1"] -= 0.2;
     roll_b["index_flex1"] -= 0.2, roll_b["thumb_flex1"] += 0.2;
@@ -156,6 +168,7 @@ std::vector<Scenario> Build() {
               Key(6.5, Lifted(grasp, 0.07), pinch, 0.6)};
     s.close_start = 1.2;
     s.grasp_closed = 2.5;
+    s.camera_target = Vec3(-0.03, 0.0, 0.06);
     all.push_back(s);
   }
   return all;

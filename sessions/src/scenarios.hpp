@@ -27,6 +27,12 @@ struct Scenario {
   double close_start = 0.0;                // [s] when closing starts
   Vec3 initial_error_direction_W = Vec3::Zero();  // fixed direction of the initial position
                                                   // error (0: random)
+  struct Prop {                                   // a static box on the table (e.g. a book)
+    Transform T_W = Transform::Identity();
+    Vec3 half_extents = Vec3::Zero();
+    Eigen::Vector4d rgba{0.5, 0.5, 0.5, 1.0};
+  };
+  std::vector<Prop> props;
   double duration() const { return keys.empty() ? 0.0 : keys.back().t; }
 };
 

@@ -9,9 +9,8 @@
 #include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
 
 #include <Eigen/Eigenvalues>
-
-#include <cstdio>
-#include <cstdlib>
+#include <algorithm>
+#include <cmath>
 
 #include "inhand/core/error.hpp"
 
@@ -20,7 +19,18 @@ namespace inhand::sim {
 namespace {
 
 constexpr double kMargin = 0.0005;  // [m] collision margin of hulls and boxes
-constexpr int kArmDofs = 6;         // x, y, z, yaw, pitch, roll
+constexpr int kArmDofs = 6;         // x, y, z, then rotations about z, x, y
+
+// R = Rz(a) Rx(b) Ry(c): singular only when the fingers (palm y) point straight up or down,
+// which no scenario needs (side grasps have the thumb up, top grasps the palm down).
+Vec3 ZxyAngles(const Mat3& R) {
+  const double b = std::asin(std::clamp(R(2, 1), -1.0, 1.0));
+  return Vec3(std::atan2(-R(0, 1), R(1, 1)), b, std::atan2(-R(2, 0), R(2, 2)));
+}
+Mat3 ZxyRotation(const Vec3& abc) {
+  return (Eigen::AngleAxisd(abc[0], Vec3::UnitZ()) * Eigen::AngleAxisd(abc[1], Vec3::UnitX()) *
+          Eigen::AngleAxisd(abc[2], Vec3::UnitY())).toRotationMatrix();
+}
 
 btVector3 Bt(const Vec3& v) { return btVector3(v.x(), v.y(), v.z()); }
 Vec3 Ei(const btVector3& v) { return Vec3(v.x(), v.y(), v.z()); }
@@ -93,6 +103,8 @@ struct World::Impl {
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::unique_ptr<btDefaultMotionState> object_state, table_state;
   std::unique_ptr<btRigidBody> object, table;
+  std::vector<std::unique_ptr<btDefaultMotionState>> prop_states;
+  std::vector<std::unique_ptr<btRigidBody>> props;
   std::unique_ptr<btMultiBody> mb;
   std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
   std::vector<std::unique_ptr<btMultiBodyJointMotor>> motors;  // arm first, then hand q order
@@ -100,12 +112,12 @@ struct World::Impl {
   std::vector<int> q_link;      // multibody link of each hand q entry
   std::vector<int> link_of;     // multibody link of each hand link (-1: the palm is link 5)
   Transform T_OB = Transform::Identity();
-  Vec3 last_rpy = Vec3::Zero();
+  Vec3 last_rpy = Vec3::Zero();  // last arm rotation angles, for unwrapping
   explicit Impl(const HandModel& h) : hand(h) {}
 };
 
 World::World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
-             const Transform& T_WP0, const Eigen::VectorXd& q0)
+             const Transform& T_WP0, const Eigen::VectorXd& q0, const std::vector<std::pair<Transform, Vec3>>& props)
     : impl_(std::make_unique<Impl>(hand)) {
   Impl& w = *impl_;
   w.world.setGravity(btVector3(0, 0, -9.81));
@@ -124,6 +136,17 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   w.table->setFriction(0.5);
   w.table->setUserIndex(-2);
   w.world.addRigidBody(w.table.get());
+
+  for (const auto& [T, half] : props) {
+    auto* box = new btBoxShape(Bt(half));
+    box->setMargin(kMargin);
+    w.shapes.emplace_back(box);
+    w.prop_states.push_back(std::make_unique<btDefaultMotionState>(Bt(T)));
+    w.props.push_back(std::make_unique<btRigidBody>(btRigidBody::btRigidBodyConstructionInfo(0.0, w.prop_states.back().get(), box)));
+    w.props.back()->setFriction(0.6);
+    w.props.back()->setUserIndex(-2);
+    w.world.addRigidBody(w.props.back().get());
+  }
 
   // Object: body frame at the centre of mass along the principal axes.
   Eigen::SelfAdjointEigenSolver<Mat3> eig(object.inertia_com);
@@ -144,6 +167,8 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   w.object->setRollingFriction(0.001);
   w.object->setSpinningFriction(0.001);
   w.object->setActivationState(DISABLE_DEACTIVATION);
+  w.object->setCcdMotionThreshold(0.002);  // thin objects (the pen) must not tunnel through the table
+  w.object->setCcdSweptSphereRadius(0.002);
   w.object->setUserIndex(-1);
   w.world.addRigidBody(w.object.get());
 
@@ -158,8 +183,8 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   w.mb->setupPrismatic(1, 2.0, small, 0, id, btVector3(0, 1, 0), zero, zero, true);
   w.mb->setupPrismatic(2, 2.0, small, 1, id, btVector3(0, 0, 1), zero, zero, true);
   w.mb->setupRevolute(3, 1.0, small, 2, id, btVector3(0, 0, 1), zero, zero, true);
-  w.mb->setupRevolute(4, 1.0, small, 3, id, btVector3(0, 1, 0), zero, zero, true);
-  w.mb->setupRevolute(5, 0.5, Bt(Vec3(4e-4, 4e-4, 6e-4)), 4, id, btVector3(1, 0, 0), zero, zero, true);
+  w.mb->setupRevolute(4, 1.0, small, 3, id, btVector3(1, 0, 0), zero, zero, true);
+  w.mb->setupRevolute(5, 0.5, Bt(Vec3(4e-4, 4e-4, 6e-4)), 4, id, btVector3(0, 1, 0), zero, zero, true);
   w.link_of.assign(hand.links.size(), -1);
   w.link_of[static_cast<std::size_t>(hand.root_link)] = 5;
   int next = kArmDofs;
@@ -234,9 +259,9 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   }
 
   // Initial state.
-  const Vec3 rpy = RpyFromRotation(T_WP0.linear());
-  w.last_rpy = rpy;
-  const double arm[kArmDofs] = {T_WP0.translation().x(), T_WP0.translation().y(), T_WP0.translation().z(), rpy.z(), rpy.y(), rpy.x()};
+  const Vec3 abc = ZxyAngles(T_WP0.linear());
+  w.last_rpy = abc;
+  const double arm[kArmDofs] = {T_WP0.translation().x(), T_WP0.translation().y(), T_WP0.translation().z(), abc[0], abc[1], abc[2]};
   for (int i = 0; i < kArmDofs; ++i) w.mb->setJointPos(i, arm[i]);
   for (int i = 0; i < hand.num_q(); ++i) w.mb->setJointPos(w.q_link[static_cast<std::size_t>(i)], q0[i]);
   btAlignedObjectArray<btQuaternion> scratch_q;
@@ -254,14 +279,15 @@ World::~World() {
   w.world.removeMultiBody(w.mb.get());
   w.world.removeRigidBody(w.object.get());
   w.world.removeRigidBody(w.table.get());
+  for (auto& p : w.props) w.world.removeRigidBody(p.get());
 }
 
 void World::SetTargets(const Transform& T_WP, const Eigen::VectorXd& q_target, const Eigen::VectorXd& tau_max) {
   Impl& w = *impl_;
-  Vec3 rpy = RpyFromRotation(T_WP.linear());
-  for (int k = 0; k < 3; ++k) rpy[k] = Unwrap(rpy[k], w.last_rpy[k]);
-  w.last_rpy = rpy;
-  const double arm[kArmDofs] = {T_WP.translation().x(), T_WP.translation().y(), T_WP.translation().z(), rpy.z(), rpy.y(), rpy.x()};
+  Vec3 abc = ZxyAngles(T_WP.linear());
+  for (int k = 0; k < 3; ++k) abc[k] = Unwrap(abc[k], w.last_rpy[k]);
+  w.last_rpy = abc;
+  const double arm[kArmDofs] = {T_WP.translation().x(), T_WP.translation().y(), T_WP.translation().z(), abc[0], abc[1], abc[2]};
   for (int i = 0; i < kArmDofs; ++i) {
     w.motors[static_cast<std::size_t>(i)]->setPositionTarget(arm[i], 0.5);
     w.motors[static_cast<std::size_t>(i)]->setVelocityTarget(0.0, 0.5);
@@ -287,10 +313,9 @@ void World::Step(double dt) {
     const btCollisionObject* a = m->getBody0();
     const btCollisionObject* b = m->getBody1();
     const bool a_obj = a == w.object.get(), b_obj = b == w.object.get();
-    if (std::getenv("INHAND_SIM_DEBUG2") && m->getNumContacts() > 0) std::fprintf(stderr, "manifold %d-%d n=%d\n", a->getUserIndex(), b->getUserIndex(), m->getNumContacts());
     if (!a_obj && !b_obj) continue;
     const btCollisionObject* other = a_obj ? b : a;
-    if (other == w.table.get()) {
+    if (other == w.table.get() || other->getUserIndex() == -2) {
       for (int k = 0; k < m->getNumContacts(); ++k)
         if (m->getContactPoint(k).getDistance() < 0.001) touches_table_ = true;
       continue;
@@ -322,7 +347,7 @@ Eigen::VectorXd World::JointPositions() const {
 Transform World::PalmPose() const {
   const btMultiBody& mb = *impl_->mb;
   const Vec3 p(mb.getJointPos(0), mb.getJointPos(1), mb.getJointPos(2));
-  return MakeTransform(p, RotationFromRpy(Vec3(mb.getJointPos(5), mb.getJointPos(4), mb.getJointPos(3))));
+  return MakeTransform(p, ZxyRotation(Vec3(mb.getJointPos(3), mb.getJointPos(4), mb.getJointPos(5))));
 }
 
 Transform World::ObjectPose() const {

@@ -21,8 +21,10 @@ struct LinkContact {
 
 class World {
  public:
+  // `props`: static boxes (pose, half extents) on the table.
   World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
-        const Transform& T_WP0, const Eigen::VectorXd& q0);
+        const Transform& T_WP0, const Eigen::VectorXd& q0,
+        const std::vector<std::pair<Transform, Vec3>>& props = {});
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;

@@ -10,7 +10,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <map>
 #include <random>
 #include <sstream>
 
@@ -248,7 +247,9 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     for (std::size_t l = 0; l < hand.links.size(); ++l) T_WL[l] = T_WP * kin.T_PL(static_cast<int>(l));
   };
   const Transform T_WO0 = scenario->T_WO;
-  sim::World world(hand, object, T_WO0, 1.5, sim::PalmAt(*scenario, 0.0), q);  // rubber-like fingers
+  std::vector<std::pair<Transform, Vec3>> props;
+  for (const sim::Scenario::Prop& p : scenario->props) props.emplace_back(p.T_W, p.half_extents);
+  sim::World world(hand, object, T_WO0, 1.5, sim::PalmAt(*scenario, 0.0), q, props);  // rubber-like fingers
   place_links(sim::PalmAt(*scenario, 0.0));
 
   // Camera fixed in the world, looking at the workspace.
@@ -277,6 +278,11 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     world_scene.items.push_back({table, MakeTransform(Vec3(0, 0, -0.025), Mat3::Identity()), kExtraLabelBase, std::nullopt, 1.0, false});
     const int wall = renderer->AddMesh(TexturedBox(Vec3(0.8, 0.5, 0.01), ClutterTexture(clutter_rng)));
     world_scene.items.push_back({wall, MakeTransform(Vec3(-0.1, 0.45, 0.3), ExpSO3(Vec3(M_PI / 2, 0, 0))), kExtraLabelBase + 1, std::nullopt, 1.0, false});
+    for (const sim::Scenario::Prop& p : scenario->props) {
+      TriangleMesh mesh = ConvexPiece::Box(p.half_extents, Transform::Identity()).ToMesh();
+      mesh.material.rgba = p.rgba;
+      world_scene.items.push_back({renderer->AddMesh(mesh), p.T_W, static_cast<std::uint16_t>(kExtraLabelBase + 50), std::nullopt, 1.0, false});
+    }
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int i = 0; i < 6 + noise.occluders; ++i) {
       const bool occluder = i >= 6;
@@ -385,20 +391,6 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
 
     const Transform T_WO = world.ObjectPose();
     const Transform T_PO = T_PW * T_WO;
-    if (std::getenv("INHAND_SIM_DEBUG") && k % 100 == 0) {
-      Vec3 F = Vec3::Zero();
-      std::map<int, int> per_link;
-      for (const sim::LinkContact& c : world.contacts()) F += c.force_W, per_link[c.link]++;
-      std::fprintf(stderr, "t=%.2f contacts=%zu F=(%.1f %.1f %.1f) z=%.4f table=%d q:", t, world.contacts().size(), F.x(), F.y(), F.z(),
-                   T_WO.translation().z(), world.ObjectTouchesTable());
-      for (int j : {1,2,3,5,6,13,14,15}) std::fprintf(stderr, " %.2f", q[j]);
-      std::fprintf(stderr, " palm=(%.3f %.3f %.3f) script=(%.3f %.3f %.3f) rot_err=%.3f", T_WP.translation().x(), T_WP.translation().y(), T_WP.translation().z(),
-                   T_WP_script.translation().x(), T_WP_script.translation().y(), T_WP_script.translation().z(), RotationDistance(T_WP.linear(), T_WP_script.linear()));
-      std::fprintf(stderr, " tau:");
-      for (int j : {1,2,3,5,6,13,14,15}) std::fprintf(stderr, " %.2f", tau_filtered[j]);
-      for (auto [l, n] : per_link) std::fprintf(stderr, " %s:%d", hand.links[l].name.c_str(), n);
-      std::fprintf(stderr, "\n");
-    }
     if (t <= scenario->close_start + 1e-9) p_WO_close = T_WO.translation();
 
     if (k % joint_every == 0) {

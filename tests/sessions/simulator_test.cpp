@@ -90,3 +90,44 @@ TEST(Simulator, RejectsBadOptions) {
 
 }  // namespace
 }  // namespace inhand
+
+namespace inhand {
+namespace {
+
+SimulationSummary Physics(const std::string& scenario) {
+  test::TempDir dir;
+  SimulateOptions o;
+  o.scenario = scenario;
+  o.out_dir = dir / "s";
+  o.noise = NoiseProfile::kNone;
+  o.images = false;
+  return Simulate(o);
+}
+
+// Physical plausibility of the scenarios whose grasps hold (brush and pen: open work).
+TEST(SimulatorPhysics, KetchupIsHeldLiftedAndTiltsInTheHand) {
+  const SimulationSummary s = Physics("ketchup-power-grasp");
+  EXPECT_GT(s.held_fraction, 0.95);
+  EXPECT_GT(s.lift_height, 0.08);
+  EXPECT_LT(s.max_penetration, 0.001);
+  EXPECT_GT(s.tilt_in_hand_deg, 5.0);
+  EXPECT_LT(s.wall_time, 3.0 * s.duration);
+}
+
+TEST(SimulatorPhysics, WaterBottleIsPushedAlongTheTableThenHeld) {
+  const SimulationSummary s = Physics("water-push-grasp");
+  EXPECT_GT(s.table_travel_before_grasp, 0.01);
+  EXPECT_GT(s.held_fraction, 0.95);
+  EXPECT_GT(s.lift_height, 0.08);
+  EXPECT_LT(s.max_penetration, 0.001);
+}
+
+TEST(SimulatorPhysics, ShampooIsHeldAndLifted) {
+  const SimulationSummary s = Physics("shampoo-grasp");
+  EXPECT_GT(s.held_fraction, 0.95);
+  EXPECT_GT(s.lift_height, 0.08);
+  EXPECT_LT(s.max_penetration, 0.001);
+}
+
+}  // namespace
+}  // namespace inhand
