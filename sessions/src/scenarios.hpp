@@ -24,6 +24,7 @@ struct Scenario {
   Vec3 camera_target = Vec3(0.0, 0.0, 0.1);
   std::vector<Keyframe> keys;
   double grasp_closed = 0.0;               // [s] when the fingers have closed (for checks)
+  double record_start = 1.0;               // [s] the hand is in place: the session begins
   double close_start = 0.0;                // [s] when closing starts
   Vec3 initial_error_direction_W = Vec3::Zero();  // fixed direction of the initial position
                                                   // error (0: random)

@@ -207,6 +207,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     throw InputError("simulation rates must satisfy physics >= 500 Hz >= joints >= camera > 0");
   if (opt.image_width < 16 || opt.image_height < 16 || opt.image_width % 2 || opt.image_height % 2)
     throw InputError("image size must be even and at least 16x16");
+  if (fs::exists(opt.out_dir) && !opt.overwrite)
+    throw InputError(opt.out_dir + ": already exists (pass overwrite to replace it)");
   const auto wall_start = std::chrono::steady_clock::now();
   const std::string assets = AssetDir();
   const fs::path hand_dir = fs::path(assets) / "hands" / "inhand_hand";
@@ -311,15 +313,13 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   info.hand_urdf = "model/hand/inhand_hand.urdf";
   info.object = "model/object/object.json";
   if (opt.images) info.camera = K;
-  const Transform T_PO0 = sim::PalmAt(*scenario, 0.0).inverse() * T_WO0;
-  {
-    Vec3 dir = scenario->initial_error_direction_W.norm() > 0
-                   ? Vec3(sim::PalmAt(*scenario, 0.0).linear().transpose() * scenario->initial_error_direction_W.normalized())
-                   : RandomUnit(rng);
-    const Vec3 axis = RandomUnit(rng);
-    info.initial_T_PO = MakeTransform(T_PO0.translation() + noise.initial_position * dir,
-                                      ExpSO3(noise.initial_orientation * axis) * T_PO0.linear());
-  }
+  // The recording starts when the hand is in place around the object (as with a real robot,
+  // whose estimator is seeded by a vision system before the manipulation): the initial estimate
+  // is the truth at that moment, off by the profile's error.
+  const double record_start = scenario->record_start;
+  const Vec3 error_dir_random = RandomUnit(rng);
+  const Vec3 error_axis = RandomUnit(rng);
+  Transform T_PO0 = Transform::Identity();
   info.sigma_position = 0.020;
   info.sigma_orientation = 5.0 * M_PI / 180;
   info.sigma_joint_bias = 5.0 * M_PI / 180;
@@ -342,10 +342,20 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
                               {"pixel_sigma", noise.pixel_sigma},
                               {"blur_sigma_px", noise.blur_sigma},
                               {"occluders", noise.occluders}}}};
-  info.provenance_json = provenance.dump();
-  SessionWriter writer(opt.out_dir, info, hand.QNames(), opt.overwrite);
-  CopyFolder(writer, hand_dir, "model/hand");
-  CopyFolder(writer, object_dir, "model/object");
+  std::unique_ptr<SessionWriter> writer;
+  const auto start_recording = [&](const Transform& T_WP_now, const Transform& T_PO_now) {
+    T_PO0 = T_PO_now;
+    const Vec3 dir = scenario->initial_error_direction_W.norm() > 0
+                         ? Vec3(T_WP_now.linear().transpose() * scenario->initial_error_direction_W.normalized())
+                         : error_dir_random;
+    info.initial_T_PO = MakeTransform(T_PO0.translation() + noise.initial_position * dir,
+                                      ExpSO3(noise.initial_orientation * error_axis) * T_PO0.linear());
+    provenance["record_start"] = record_start;
+    info.provenance_json = provenance.dump();
+    writer = std::make_unique<SessionWriter>(opt.out_dir, info, hand.QNames(), opt.overwrite);
+    CopyFolder(*writer, hand_dir, "model/hand");
+    CopyFolder(*writer, object_dir, "model/object");
+  };
 
   // Truth for diagnostics and the plausibility checks.
   BulletContactQuery truth_contacts(hand, object);
@@ -392,15 +402,17 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     const Transform T_WO = world.ObjectPose();
     const Transform T_PO = T_PW * T_WO;
     if (t <= scenario->close_start + 1e-9) p_WO_close = T_WO.translation();
+    const bool recording = t >= record_start - 1e-9;
+    if (recording && !writer) start_recording(T_WP, T_PO);
 
-    if (k % joint_every == 0) {
+    if (recording && k % joint_every == 0) {
       Eigen::VectorXd q_meas(m), tau_meas(m);
       for (int j = 0; j < m; ++j) {
         q_meas[j] = q[j] - bias[j] + noise.joint_sigma * gauss(rng);
         tau_meas[j] = tau_filtered[j] + noise.torque_sigma * gauss(rng);
       }
-      writer.AddJointSample(t, q_meas, tau_meas);
-      writer.AddGroundTruth(t, T_PO);
+      writer->AddJointSample(t, q_meas, tau_meas);
+      writer->AddGroundTruth(t, T_PO);
       ++summary.joint_samples;
       // Truth checks with the estimator's own GJK on the true configuration.
       truth_contacts.Query(kin.link_poses(), T_PO, 0.001, pairs);
@@ -426,7 +438,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
         held += touching >= 2;
       }
     }
-    if (opt.images && k % camera_every == 0) {
+    if (recording && opt.images && k % camera_every == 0) {
       Scene scene = world_scene;
       AddHand(scene, hand_meshes, T_WL);
       AddObject(scene, object_meshes, T_WO);
@@ -450,7 +462,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
         sum += n;
         sum.convertTo(img, CV_8UC3);
       }
-      writer.AddCameraFrame(t, out.colour, T_PW * T_WC * hand_eye_error);
+      writer->AddCameraFrame(t, out.colour, T_PW * T_WC * hand_eye_error);
       ++summary.camera_frames;
     }
   }
@@ -472,9 +484,10 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
                        {"max_in_hand_rotation_deg", summary.max_in_hand_rotation_deg},
                        {"table_travel_before_grasp_m", summary.table_travel_before_grasp},
                        {"lift_height_m", summary.lift_height}};
-  writer.AddFile("truth/truth.json", truth.dump(2) + "\n");
-  writer.AddFile("truth/contacts.csv", contacts_csv.str());
-  writer.Commit();
+  INHAND_CHECK(writer != nullptr, "the script ends before the recording starts");
+  writer->AddFile("truth/truth.json", truth.dump(2) + "\n");
+  writer->AddFile("truth/contacts.csv", contacts_csv.str());
+  writer->Commit();
   summary.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return summary;
 }
