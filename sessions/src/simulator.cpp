@@ -1,11 +1,5 @@
 #include "inhand/sessions/simulator.hpp"
 
-#include <apriltag/apriltag.h>
-#include <apriltag/tag16h5.h>
-#include <apriltag/tag25h9.h>
-#include <apriltag/tag36h11.h>
-#include <apriltag/tagStandard41h12.h>
-
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -18,6 +12,7 @@
 
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
+#include "inhand/features/tags.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
@@ -115,46 +110,6 @@ void CopyFolder(SessionWriter& w, const fs::path& from, const std::string& to) {
     if (e.is_regular_file()) files.push_back(e.path());
   std::sort(files.begin(), files.end());
   for (const fs::path& f : files) w.AddFile(to + "/" + fs::relative(f, from).string(), ReadBinary(f));
-}
-
-// A tag bitmap (white border included) as a textured quad in the tag frame.
-TriangleMesh TagQuad(const TagPlacement& tag) {
-  apriltag_family_t* fam = nullptr;
-  void (*destroy)(apriltag_family_t*) = nullptr;
-  if (tag.family == "tag36h11") fam = tag36h11_create(), destroy = tag36h11_destroy;
-  else if (tag.family == "tag25h9") fam = tag25h9_create(), destroy = tag25h9_destroy;
-  else if (tag.family == "tag16h5") fam = tag16h5_create(), destroy = tag16h5_destroy;
-  else if (tag.family == "tagStandard41h12") fam = tagStandard41h12_create(), destroy = tagStandard41h12_destroy;
-  else throw InputError("tag family '" + tag.family + "' cannot be rendered (tag36h11, tag25h9, tag16h5, tagStandard41h12)");
-  if (tag.id < 0 || static_cast<unsigned>(tag.id) >= fam->ncodes) {
-    destroy(fam);
-    throw InputError("tag id " + std::to_string(tag.id) + " is not in family " + tag.family);
-  }
-  image_u8_t* im = apriltag_to_image(fam, tag.id);
-  const int w = im->width;
-  cv::Mat small(im->height, im->width, CV_8UC1);
-  for (int y = 0; y < im->height; ++y)
-    for (int x = 0; x < im->width; ++x) small.at<std::uint8_t>(y, x) = im->buf[y * im->stride + x];
-  free(im->buf);
-  free(im);
-  // The black border sits one module inside the bitmap (the family's width_at_border).
-  const double modules_to_border = static_cast<double>(fam->width_at_border);
-  destroy(fam);
-  cv::Mat big, rgb;
-  cv::resize(small, big, cv::Size(w * 24, w * 24), 0, 0, cv::INTER_NEAREST);
-  cv::cvtColor(big, rgb, cv::COLOR_GRAY2BGR);
-  std::vector<std::uint8_t> png;
-  cv::imencode(".png", rgb, png);
-  const double half = 0.5 * tag.size * w / modules_to_border;
-  TriangleMesh m;
-  m.vertices = {Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0), Vec3(-half, half, 0)};
-  m.normals.assign(4, Vec3::UnitZ());
-  m.uvs = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
-  m.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
-  m.material.name = tag.family + ":" + std::to_string(tag.id);
-  m.material.rgba = Eigen::Vector4d(1, 1, 1, 1);
-  m.material.texture_blob = png;
-  return m;
 }
 
 // A flat textured rectangle (table top, backdrop) with a procedural pattern.
@@ -271,7 +226,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     renderer = std::make_unique<Renderer>();
     hand_meshes = UploadHand(*renderer, hand);
     object_meshes = UploadObject(*renderer, object);
-    for (const TagPlacement& tag : object.tags) tag_meshes.push_back(renderer->AddMesh(TagQuad(tag)));
+    for (const TagPlacement& tag : object.tags) tag_meshes.push_back(renderer->AddMesh(MakeTagMesh(tag)));
     std::mt19937 clutter_rng(12345);  // the same room for every seed
     world_scene.K = K;
     world_scene.T_PC = T_WC;

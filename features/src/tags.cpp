@@ -1,0 +1,169 @@
+#include "inhand/features/tags.hpp"
+
+#include <apriltag/apriltag.h>
+#include <apriltag/common/image_u8.h>
+#include <apriltag/common/pjpeg.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
+#include <apriltag/tag36h11.h>
+#include <apriltag/tagCircle21h7.h>
+#include <apriltag/tagStandard41h12.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "inhand/core/error.hpp"
+
+namespace inhand {
+
+void TagDetectorParams::Validate() const {
+  const auto fail = [](const std::string& field, const std::string& value, const std::string& expected) {
+    throw InputError("tag detector parameter '" + field + "' is " + value + ", expected " + expected);
+  };
+  if (family != "tag36h11" && family != "tag25h9" && family != "tag16h5" && family != "tagStandard41h12" &&
+      family != "tagCircle21h7")
+    fail("family", "'" + family + "'", "tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
+  if (!(decimate >= 1.0 && decimate <= 8.0)) fail("decimate", std::to_string(decimate), "a number in [1, 8]");
+  if (!(sigma >= 0.0 && sigma <= 10.0)) fail("sigma", std::to_string(sigma), "a number in [0, 10]");
+  if (threads < 1 || threads > 64) fail("threads", std::to_string(threads), "an integer in [1, 64]");
+  if (max_hamming < 0 || max_hamming > 3) fail("max_hamming", std::to_string(max_hamming), "an integer in [0, 3]");
+}
+
+namespace {
+
+struct Family {
+  apriltag_family_t* family = nullptr;
+  void (*destroy)(apriltag_family_t*) = nullptr;
+};
+
+Family CreateFamily(const std::string& f) {
+  if (f == "tag36h11") return {tag36h11_create(), tag36h11_destroy};
+  if (f == "tag25h9") return {tag25h9_create(), tag25h9_destroy};
+  if (f == "tag16h5") return {tag16h5_create(), tag16h5_destroy};
+  if (f == "tagStandard41h12") return {tagStandard41h12_create(), tagStandard41h12_destroy};
+  if (f == "tagCircle21h7") return {tagCircle21h7_create(), tagCircle21h7_destroy};
+  throw InputError("tag family '" + f + "' is unknown, expected tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
+}
+
+}  // namespace
+
+TriangleMesh MakeTagMesh(const TagPlacement& tag) {
+  const Family fam = CreateFamily(tag.family);
+  if (tag.id < 0 || static_cast<unsigned>(tag.id) >= fam.family->ncodes) {
+    fam.destroy(fam.family);
+    throw InputError("tag id " + std::to_string(tag.id) + " is not in family " + tag.family);
+  }
+  image_u8_t* im = apriltag_to_image(fam.family, tag.id);
+  const int w = im->width;
+  // The outer black border sits width_at_border modules across, centred in the bitmap.
+  const double border_modules = static_cast<double>(fam.family->width_at_border);
+  fam.destroy(fam.family);
+  constexpr int kScale = 24;  // nearest-neighbour upscaling keeps the edges sharp when sampled
+  cv::Mat big(w * kScale, w * kScale, CV_8UC3);
+  for (int y = 0; y < big.rows; ++y)
+    for (int x = 0; x < big.cols; ++x) {
+      const std::uint8_t v = im->buf[(y / kScale) * im->stride + x / kScale];
+      big.at<cv::Vec3b>(y, x) = cv::Vec3b(v, v, v);
+    }
+  image_u8_destroy(im);
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", big, png);
+  const double half = 0.5 * tag.size * w / border_modules;
+  TriangleMesh m;
+  m.vertices = {Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0), Vec3(-half, half, 0)};
+  m.normals.assign(4, Vec3::UnitZ());
+  m.uvs = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  m.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
+  m.material.name = tag.family + ":" + std::to_string(tag.id);
+  m.material.rgba = Eigen::Vector4d(1, 1, 1, 1);
+  m.material.texture_blob = png;
+  return m;
+}
+
+Image8 ReadGreyImage(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".jpg" || ext == ".jpeg") {
+    int error = 0;
+    pjpeg_t* jpeg = pjpeg_create_from_file(path.c_str(), 0, &error);
+    if (jpeg == nullptr) throw InputError(path + ": not a readable JPEG (libapriltag's decoder, error " + std::to_string(error) + ")");
+    image_u8_t* im = pjpeg_to_u8_baseline(jpeg);
+    Image8 out(im->width, im->height, 1);
+    for (int y = 0; y < im->height; ++y) std::copy_n(im->buf + y * im->stride, im->width, out.pixel(0, y));
+    image_u8_destroy(im);
+    pjpeg_destroy(jpeg);
+    return out;
+  }
+  const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (grey.empty()) throw InputError(path + ": not a readable image");
+  Image8 out(grey.cols, grey.rows, 1);
+  for (int y = 0; y < grey.rows; ++y) std::copy_n(grey.ptr<std::uint8_t>(y), grey.cols, out.pixel(0, y));
+  return out;
+}
+
+struct TagDetector::Impl {
+  apriltag_family_t* family = nullptr;
+  void (*destroy)(apriltag_family_t*) = nullptr;
+  apriltag_detector_t* detector = nullptr;
+  std::vector<std::uint8_t> grey;
+};
+
+TagDetector::TagDetector(const TagDetectorParams& params) : impl_(std::make_unique<Impl>()), params_(params) {
+  params_.Validate();
+  Impl& d = *impl_;
+  const Family fam = CreateFamily(params_.family);
+  d.family = fam.family;
+  d.destroy = fam.destroy;
+  d.detector = apriltag_detector_create();
+  apriltag_detector_add_family_bits(d.detector, d.family, params_.max_hamming);
+  d.detector->quad_decimate = static_cast<float>(params_.decimate);
+  d.detector->quad_sigma = static_cast<float>(params_.sigma);
+  d.detector->refine_edges = params_.refine_edges;
+  d.detector->nthreads = params_.threads;
+}
+
+TagDetector::~TagDetector() {
+  if (impl_->detector) apriltag_detector_destroy(impl_->detector);
+  if (impl_->family) impl_->destroy(impl_->family);
+}
+
+std::vector<TagDetection> TagDetector::Detect(const Image8& image) {
+  Impl& d = *impl_;
+  INHAND_CHECK(image.channels == 1 || image.channels == 3, "tag detection needs a grey or RGB image");
+  d.grey.resize(std::size_t(image.width) * image.height);
+  for (std::size_t i = 0; i < d.grey.size(); ++i) {
+    if (image.channels == 1) {
+      d.grey[i] = image.data[i];
+    } else {
+      const std::uint8_t* p = &image.data[3 * i];
+      d.grey[i] = static_cast<std::uint8_t>((299 * p[0] + 587 * p[1] + 114 * p[2] + 500) / 1000);
+    }
+  }
+  image_u8_t im{image.width, image.height, image.width, d.grey.data()};
+  zarray_t* found = apriltag_detector_detect(d.detector, &im);
+  std::vector<TagDetection> out;
+  for (int i = 0; i < zarray_size(found); ++i) {
+    apriltag_detection_t* det = nullptr;
+    zarray_get(found, i, &det);
+    if (det->decision_margin < params_.min_decision_margin) continue;
+    TagDetection t;
+    t.family = params_.family;
+    t.id = det->id;
+    t.hamming = det->hamming;
+    t.decision_margin = det->decision_margin;
+    // libapriltag's coordinates put pixel centres at +0.5; the estimator's at integers.
+    for (int k = 0; k < 4; ++k) t.corners[static_cast<std::size_t>(k)] = Vec2(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
+    t.center = Vec2(det->c[0] - 0.5, det->c[1] - 0.5);
+    out.push_back(t);
+  }
+  apriltag_detections_destroy(found);
+  std::sort(out.begin(), out.end(), [](const TagDetection& a, const TagDetection& b) {
+    return a.id != b.id ? a.id < b.id : (a.center.x() != b.center.x() ? a.center.x() < b.center.x() : a.center.y() < b.center.y());
+  });
+  return out;
+}
+
+}  // namespace inhand
