@@ -43,6 +43,14 @@ int main(int argc, char** argv) {
   replay_cmd->add_flag("--no-video", replay.no_video, "skip replay.mp4");
   replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");
 
+  inhand::app::TagsCommand tags;
+  auto* tags_cmd = cli.add_subcommand("tags", "Detect AprilTags in an image (debugging)");
+  tags_cmd->add_option("IMAGE", tags.image, "image file")->required();
+  tags_cmd->add_option("--family", tags.family, "tag family")->capture_default_str();
+  tags_cmd->add_option("--decimate", tags.decimate, "quad decimation (1 = full resolution)")->capture_default_str();
+  tags_cmd->add_option("--refine-edges", tags.refine_edges, "refine quad edges (0 or 1)")->capture_default_str();
+  tags_cmd->add_flag("--json", tags.json, "print JSON");
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -53,6 +61,7 @@ int main(int argc, char** argv) {
     if (*compare_cmd) return inhand::app::RunCompare(compare);
     if (*simulate_cmd) return inhand::app::RunSimulate(simulate);
     if (*replay_cmd) return inhand::app::RunReplay(replay);
+    if (*tags_cmd) return inhand::app::RunTags(tags);
   } catch (const inhand::InputError& e) {
     std::cerr << "inhand: error: " << e.what() << "\n";
     return 2;

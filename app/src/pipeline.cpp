@@ -17,15 +17,20 @@ std::vector<ModalitySet> ParseModalities(const std::string& list) {
   while (std::getline(ss, name, ',')) {
     if (name == "j") out.push_back({"j", false, false, false, kColourJoints});
     else if (name == "jt") out.push_back({"jt", true, false, false, kColourTorques});
-    else if (name == "jta" || name == "jtf")
-      throw InputError("--modalities: '" + name + "' (visual features) is not available in this build yet; use j,jt");
+    else if (name == "jta") out.push_back({"jta", true, true, false, kColourTags});
+    else if (name == "jtf")
+      throw InputError("--modalities: 'jtf' (extracted features) is not available in this build yet; use j, jt, jta");
     else throw InputError("--modalities: unknown set '" + name + "', expected j, jt, jta or jtf");
   }
   if (out.empty()) throw InputError("--modalities: empty list");
   return out;
 }
 
-std::vector<ModalitySet> DefaultModalities(const Session&) { return ParseModalities("j,jt"); }
+std::vector<ModalitySet> DefaultModalities(const Session& session) {
+  // Tags need images; whether the object carries tags is known once the models are loaded, and
+  // a jta filter without tags simply equals jt.
+  return ParseModalities(session.info().camera ? "j,jt,jta" : "j,jt");
+}
 
 Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets)
     : session_(session), models_(LoadSessionModels(session, true)), params_(params), sets_(std::move(sets)) {
@@ -35,6 +40,16 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
     filters_.push_back(std::make_unique<Filter>(models_.hand, *queries_.back(), params_, s.torque));
   }
   last_.resize(sets_.size());
+  bool tags = false;
+  for (const ModalitySet& m : sets_) tags = tags || m.tags;
+  if (tags) {
+    if (!session_.info().camera) throw InputError(session_.dir() + ": modality jta needs camera images, the session has none");
+    if (models_.object.tags.empty())
+      throw InputError(models_.object.source + ": modality jta needs AprilTags on the object, it has none");
+    TagDetectorParams p;
+    p.family = models_.object.tags.front().family;
+    tag_detector_ = std::make_unique<TagDetector>(p);
+  }
 }
 
 void Pipeline::Step(int k) {
@@ -57,6 +72,41 @@ void Pipeline::Step(int k) {
     r.step_time_us = us;
     r.constraints = f.trace().num_constraints;
     r.contacts = static_cast<int>(f.trace().contacts.size());
+    r.visual_ms = -1.0;
+    r.visual_used = 0;
+  }
+
+  // Camera frames that arrived by this sample: tag corners for the sets that use them.
+  const auto& frames = session_.camera_frames();
+  last_frame_ = -1;
+  while (next_frame_ < frames.size() && frames[next_frame_].t <= t + 1e-9) {
+    const int f = static_cast<int>(next_frame_++);
+    last_frame_ = f;
+    image_ = session_.LoadImage(f);
+    tags_.clear();
+    if (!tag_detector_) continue;
+    const Intrinsics& K = *info.camera;
+    const auto start = std::chrono::steady_clock::now();
+    tags_ = tag_detector_->Detect(image_);
+    features_.clear();
+    for (const TagDetection& d : tags_)
+      for (const TagPlacement& tag : models_.object.tags) {
+        if (tag.id != d.id || tag.family != d.family) continue;
+        const auto corners = tag.CornersO();
+        for (int c = 0; c < 4; ++c)
+          features_.push_back({d.id * 4 + c, corners[static_cast<std::size_t>(c)], K.Undistort(d.corners[static_cast<std::size_t>(c)])});
+      }
+    const double detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    for (std::size_t i = 0; i < filters_.size(); ++i) {
+      if (!sets_[i].tags) continue;
+      const auto update_start = std::chrono::steady_clock::now();
+      last_[i].visual_used = filters_[i]->UpdateVisual(features_, frames[static_cast<std::size_t>(f)].T_PC, K);
+      last_[i].visual_ms = detect_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - update_start).count();
+      last_[i].T_PO = filters_[i]->T_PO();
+    }
+  }
+  for (std::size_t i = 0; i < filters_.size(); ++i) {
+    EstimateRecord& r = last_[i];
     if (session_.has_groundtruth()) {
       const Transform gt = session_.GroundTruthAt(t);
       r.position_error = (r.T_PO.translation() - gt.translation()).norm();
@@ -91,7 +141,7 @@ Image8 FrameComposer::Compose(int camera_frame, double t, const OverlayLayers& l
   const CameraFrame& frame = s.camera_frames().at(static_cast<std::size_t>(camera_frame));
   const Intrinsics& K = *s.info().camera;
   OverlayFrame of;
-  of.camera = s.LoadImage(camera_frame);
+  of.camera = p_.last_frame() == camera_frame ? p_.last_image() : s.LoadImage(camera_frame);
   of.T_PC = frame.T_PC;
   of.K = K;
   of.friction_cone_deg = p_.params().friction_cone_deg;
@@ -106,6 +156,7 @@ Image8 FrameComposer::Compose(int camera_frame, double t, const OverlayLayers& l
     OverlayEstimate e{p_.sets()[i].name, p_.sets()[i].colour, r.T_PO, f.covariance().topLeftCorner<3, 3>(), false, {}, {}};
     for (const FilterTrace::Contact& c : f.trace().contacts)
       e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
+    for (const FilterTrace::Visual& v : f.trace().visual) e.features.push_back({v.measured, v.predicted, !v.gated});
     of.estimates.push_back(e);
     std::ostringstream line;
     line << std::fixed << std::setprecision(1) << p_.sets()[i].name << ": ";

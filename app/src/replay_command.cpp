@@ -66,6 +66,8 @@ double Percentile(std::vector<double> v, double p) {
 
 struct SetStats {
   std::vector<double> step_us;
+  std::vector<double> visual_ms;
+  long features_used = 0;
   double sq_pos = 0.0, sq_ori = 0.0;
   int with_truth = 0;
   long constraints = 0;
@@ -101,7 +103,6 @@ int RunReplay(const ReplayCommand& cmd) {
   std::unique_ptr<VideoWriter> video;
   const auto& frames = session.camera_frames();
   const double fps = frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t) : 10.0;
-  std::size_t next_frame = 0;
   std::vector<SetStats> stats(sets.size());
   const bool tty = ::isatty(STDERR_FILENO);
   const auto wall_start = std::chrono::steady_clock::now();
@@ -122,6 +123,7 @@ int RunReplay(const ReplayCommand& cmd) {
       csv << "\n";
       SetStats& st = stats[i];
       if (k > 0) st.step_us.push_back(r.step_time_us);
+      if (r.visual_ms >= 0.0) st.visual_ms.push_back(r.visual_ms), st.features_used += r.visual_used;
       st.constraints += r.constraints;
       if (std::isfinite(r.position_error)) {
         st.sq_pos += r.position_error * r.position_error;
@@ -130,21 +132,20 @@ int RunReplay(const ReplayCommand& cmd) {
       }
       st.last = r;
     }
-    // Camera frames due by this sample.
-    while (next_frame < frames.size() && frames[next_frame].t <= session.t(k) + 1e-9) {
+    // The camera frame this sample processed, if any.
+    if (const int frame = pipeline.last_frame(); frame >= 0) {
       if (composer) {
-        const Image8 picture = composer->Compose(static_cast<int>(next_frame), session.t(k));
+        const Image8 picture = composer->Compose(frame, session.t(k));
         if (!cmd.no_video) {
           if (!video) video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width, picture.height);
           video->Write(picture);
         }
         if (cmd.frames) {
           char name[64];
-          std::snprintf(name, sizeof(name), "frames/frame_%06zu.png", next_frame);
+          std::snprintf(name, sizeof(name), "frames/frame_%06d.png", frame);
           WriteImage((out / name).string(), picture);
         }
       }
-      ++next_frame;
     }
     if (tty && (k % 100 == 0 || k == n - 1)) {
       const int width = 40, done = static_cast<int>(std::lround(width * double(k + 1) / n));
@@ -171,7 +172,9 @@ int RunReplay(const ReplayCommand& cmd) {
               {"features", sets[i].features},
               {"step_time_us_median", Median(st.step_us)},
               {"step_time_us_p95", Percentile(st.step_us, 0.95)},
-              {"visual_step_ms_median", nullptr},
+              {"visual_step_ms_median", st.visual_ms.empty() ? Json(nullptr) : Json(Median(st.visual_ms))},
+              {"visual_updates", st.visual_ms.size()},
+              {"features_used", st.features_used},
               {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
     if (st.with_truth > 0) {
       s["terminal_position_error_mm"] = st.last.position_error * 1000;

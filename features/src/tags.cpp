@@ -9,8 +9,12 @@
 #include <apriltag/tagCircle21h7.h>
 #include <apriltag/tagStandard41h12.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
@@ -88,7 +92,16 @@ Image8 ReadGreyImage(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".jpg" || ext == ".jpeg") {
     int error = 0;
+    // The decoder prints notes on unknown markers to stdout: keep stdout clean for JSON.
+    std::fflush(stdout);
+    const int saved = ::dup(STDOUT_FILENO);
+    const int null_fd = ::open("/dev/null", O_WRONLY);
+    if (saved >= 0 && null_fd >= 0) ::dup2(null_fd, STDOUT_FILENO);
     pjpeg_t* jpeg = pjpeg_create_from_file(path.c_str(), 0, &error);
+    std::fflush(stdout);
+    if (saved >= 0 && null_fd >= 0) ::dup2(saved, STDOUT_FILENO);
+    if (saved >= 0) ::close(saved);
+    if (null_fd >= 0) ::close(null_fd);
     if (jpeg == nullptr) throw InputError(path + ": not a readable JPEG (libapriltag's decoder, error " + std::to_string(error) + ")");
     image_u8_t* im = pjpeg_to_u8_baseline(jpeg);
     Image8 out(im->width, im->height, 1);

@@ -119,7 +119,7 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     for (const OverlayContact& c : e.contacts) {
       Vec2 p;
       if (!ProjectP(T_CP, K, c.c_o_P, p)) continue;
-      if (layers.cones && (c.kind == OverlayContact::Kind::kTorque || c.kind == OverlayContact::Kind::kKinematic)) {
+      if (layers.cones && c.kind == OverlayContact::Kind::kTorque) {
         // The cone's silhouette: two generators in the plane of the normal and the view ray.
         const Vec3 view = (c.c_o_P - frame.T_PC.translation()).normalized();
         Vec3 side = c.normal_P.cross(view);
@@ -133,7 +133,8 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
           }
         }
       }
-      if (layers.forces && c.force_P.norm() > 1e-9) {
+      // Forces of torque-confirmed contacts only: a rejected candidate's λ̄ is no force.
+      if (layers.forces && c.kind == OverlayContact::Kind::kTorque && c.force_P.norm() > 1e-9) {
         Vec2 q;
         if (ProjectP(T_CP, K, c.c_o_P + frame.force_scale * c.force_P, q))
           cv::arrowedLine(img, Fx(p), Fx(q), colour, 2, cv::LINE_AA, kShift, 0.25);

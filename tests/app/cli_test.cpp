@@ -219,3 +219,34 @@ TEST(Cli, ReplayRejectsBadInputWithoutPartialOutput) {
 
 }  // namespace
 }  // namespace inhand
+
+namespace inhand {
+namespace {
+
+TEST(Cli, TagsJsonReproducesTheUpstreamCorners) {
+  INHAND_REQUIRE_SHARED_ASSETS();
+  const std::string image = test::SharedAssets() + "/apriltag/upstream_test_data/test/data/34085369442_304b6bafd9_c.jpg";
+  const test::CommandResult r = test::RunInhand("tags " + image + " --decimate 1 --refine-edges 0 --json 2>/dev/null");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Json j = Json::parse(r.output);
+  ASSERT_FALSE(j.at("detections").empty());
+  // The first line of the upstream expectation: id 0, corners in libapriltag's order.
+  const Json& first = j.at("detections")[0];
+  EXPECT_EQ(first.at("id"), 0);
+  EXPECT_EQ(first.at("corners").size(), 4u);
+  EXPECT_TRUE(first.contains("decision_margin"));
+  std::ifstream expected(test::SharedAssets() + "/apriltag/upstream_test_data/test/data/34085369442_304b6bafd9_c.txt");
+  std::string line;
+  std::getline(expected, line);
+  double x0 = 0, y0 = 0;
+  ASSERT_EQ(std::sscanf(line.c_str(), "%*d, (%lf %lf)", &x0, &y0), 2);
+  bool found = false;
+  for (const Json& d : j.at("detections"))
+    found = found || (std::abs(d.at("corners")[0][0].get<double>() - x0) < 0.1 && std::abs(d.at("corners")[0][1].get<double>() - y0) < 0.1);
+  EXPECT_TRUE(found) << line;
+  EXPECT_EQ(test::RunInhand("tags " + image + " --refine-edges 3").exit_code, 2);
+  EXPECT_EQ(test::RunInhand("tags /nonexistent.png").exit_code, 2);
+}
+
+}  // namespace
+}  // namespace inhand

@@ -45,4 +45,13 @@ struct ReplayCommand {
 };
 int RunReplay(const ReplayCommand& cmd);
 
+struct TagsCommand {
+  std::string image;
+  std::string family = "tag36h11";
+  double decimate = 2.0;
+  int refine_edges = 1;
+  bool json = false;
+};
+int RunTags(const TagsCommand& cmd);
+
 }  // namespace inhand::app

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "inhand/contacts/bullet_contact_query.hpp"
+#include "inhand/features/tags.hpp"
 #include "inhand/filter/filter.hpp"
 #include "inhand/renderer/overlay.hpp"
 #include "inhand/renderer/views.hpp"
@@ -37,14 +38,21 @@ struct EstimateRecord {
   double step_time_us = 0.0;
   int constraints = 0;
   int contacts = 0;
+  double visual_ms = -1.0;  // last visual step (detection + update) when one ran at this sample
+  int visual_used = 0;      // features used by it
 };
 
 class Pipeline {
  public:
   Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets);
   int num_samples() const { return session_.num_samples(); }
-  // Runs every filter on joint sample k (k = 0 initialises them).
+  // Runs every filter on joint sample k (k = 0 initialises them), then the visual updates of
+  // the camera frames that arrived since the previous sample.
   void Step(int k);
+  // The camera frame the last Step processed (-1: none) and its image.
+  int last_frame() const { return last_frame_; }
+  const Image8& last_image() const { return image_; }
+  const std::vector<TagDetection>& last_tags() const { return tags_; }
   const std::vector<ModalitySet>& sets() const { return sets_; }
   const Filter& filter(std::size_t i) const { return *filters_[i]; }
   const EstimateRecord& last(std::size_t i) const { return last_[i]; }
@@ -60,6 +68,12 @@ class Pipeline {
   std::vector<std::unique_ptr<BulletContactQuery>> queries_;
   std::vector<std::unique_ptr<Filter>> filters_;
   std::vector<EstimateRecord> last_;
+  std::unique_ptr<TagDetector> tag_detector_;
+  std::size_t next_frame_ = 0;
+  int last_frame_ = -1;
+  Image8 image_;
+  std::vector<TagDetection> tags_;
+  std::vector<VisualFeature> features_;
 };
 
 // The annotated pictures of one camera frame: camera image with overlays | virtual view at the
