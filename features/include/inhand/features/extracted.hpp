@@ -1,0 +1,72 @@
+#pragma once
+// Extracted features, the paper's five steps between the camera image and the virtual image
+// rendered at the current estimate (estimator-math.md, "Visual update"):
+//   1. Canny on both images            → edge images
+//   2. Harris on the edge images        → corners (virtual: on the object only)
+//   3. contour pieces around the corners → the virtual edge pixels within a radius
+//   4. generalized Hough transform      → each piece located in the camera's edges, searched
+//                                          locally around its virtual corner (votes of edge
+//                                          pixels with matching gradient direction)
+//   5. RANSAC                            → matches consistent with one image similarity
+// Every stage keeps its rejects for the matching debug views. Deterministic (seeded).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "inhand/core/image.hpp"
+#include "inhand/core/so3.hpp"
+
+namespace inhand {
+
+struct FeatureParams {
+  double canny_low = 40.0;           // hysteresis thresholds on the Sobel gradient magnitude
+  double canny_high = 120.0;
+  double blur_sigma = 1.0;           // [px] Gaussian blur before Canny (noise)
+  int harris_block = 5;              // neighbourhood of the Harris matrix [px]
+  double harris_k = 0.04;
+  double harris_relative = 0.05;     // keep responses above this share of the image's maximum
+  int max_corners = 40;              // strongest virtual corners kept
+  double min_corner_distance = 10.0; // [px] between kept corners
+  int piece_radius = 14;             // [px] contour piece: edge pixels within this radius
+  int min_piece_pixels = 12;         // pieces with fewer edge pixels are rejected
+  int search_radius = 30;            // [px] local Hough search around the virtual corner
+  int orientation_bins = 8;          // gradient-direction bins (mod π) that must agree to vote
+  double min_vote_fraction = 0.45;   // votes of the peak over the piece's pixels
+  double ransac_threshold = 2.5;     // [px]
+  int ransac_iterations = 300;
+  unsigned seed = 1;
+  void Validate() const;             // throws InputError naming the field
+};
+
+struct FeatureMatch {
+  int id = -1;                 // index of the virtual corner
+  Vec2 virtual_px = Vec2::Zero();
+  Vec2 real_px = Vec2::Zero();
+  double vote_fraction = 0.0;
+  bool inlier = false;         // kept by RANSAC
+};
+
+// What each stage produced, for `inhand match` and the GUI.
+struct MatchDebug {
+  Image8 real_edges, virtual_edges;                 // grey, 255 on edges
+  std::vector<Vec2> real_corners, virtual_corners;  // Harris corners (virtual: kept ones)
+  std::vector<Vec2> virtual_corners_rejected;       // off the object, too weak or too close
+  std::vector<std::vector<Vec2>> pieces;            // per virtual corner, edge offsets
+  std::vector<int> piece_rejected;                  // corner ids whose piece was too small
+  std::vector<Image8> votes;                        // per corner, the Hough accumulator (grey)
+  std::vector<int> vote_rejected;                   // corner ids whose peak was too weak
+  Eigen::Matrix<double, 2, 3> similarity = Eigen::Matrix<double, 2, 3>::Zero();  // RANSAC model
+};
+
+struct MatchResult {
+  std::vector<FeatureMatch> matches;  // every Hough match; inliers flagged
+  MatchDebug debug;
+  int num_inliers() const;
+};
+
+// `object_mask` (optional, virtual image size, non-zero on the object's visible pixels) limits
+// the virtual corners to the object. Images are RGB or grey of the same size.
+MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
+                          const std::vector<std::uint8_t>* object_mask, const FeatureParams& params);
+
+}  // namespace inhand

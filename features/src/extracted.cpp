@@ -1,0 +1,250 @@
+#include "inhand/features/extracted.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <opencv2/imgproc.hpp>
+
+#include "inhand/core/error.hpp"
+
+namespace inhand {
+
+void FeatureParams::Validate() const {
+  const auto fail = [](const char* field, double v, const char* expected) {
+    throw InputError(std::string("feature parameter '") + field + "' is " + std::to_string(v) + ", expected " + expected);
+  };
+  if (!(canny_low > 0 && canny_high > canny_low)) fail("canny_high", canny_high, "> canny_low > 0");
+  if (!(blur_sigma >= 0 && blur_sigma <= 10)) fail("blur_sigma", blur_sigma, "in [0, 10]");
+  if (harris_block < 2 || harris_block > 31) fail("harris_block", harris_block, "in [2, 31]");
+  if (!(harris_relative > 0 && harris_relative < 1)) fail("harris_relative", harris_relative, "in (0, 1)");
+  if (max_corners < 1 || max_corners > 1000) fail("max_corners", max_corners, "in [1, 1000]");
+  if (piece_radius < 3 || piece_radius > 100) fail("piece_radius", piece_radius, "in [3, 100]");
+  if (search_radius < 1 || search_radius > 200) fail("search_radius", search_radius, "in [1, 200]");
+  if (orientation_bins < 1 || orientation_bins > 64) fail("orientation_bins", orientation_bins, "in [1, 64]");
+  if (!(min_vote_fraction > 0 && min_vote_fraction <= 1)) fail("min_vote_fraction", min_vote_fraction, "in (0, 1]");
+  if (!(ransac_threshold > 0)) fail("ransac_threshold", ransac_threshold, "> 0");
+  if (ransac_iterations < 1) fail("ransac_iterations", ransac_iterations, ">= 1");
+}
+
+int MatchResult::num_inliers() const {
+  return static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const FeatureMatch& m) { return m.inlier; }));
+}
+
+namespace {
+
+cv::Mat Grey(const Image8& im) {
+  const cv::Mat m(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3, const_cast<std::uint8_t*>(im.data.data()));
+  if (im.channels == 1) return m.clone();
+  cv::Mat g;
+  cv::cvtColor(m, g, cv::COLOR_RGB2GRAY);
+  return g;
+}
+
+Image8 ToImage(const cv::Mat& grey) {
+  Image8 out(grey.cols, grey.rows, 1);
+  for (int y = 0; y < grey.rows; ++y) std::copy_n(grey.ptr<std::uint8_t>(y), grey.cols, out.pixel(0, y));
+  return out;
+}
+
+struct EdgeData {
+  cv::Mat edges;        // CV_8U, 255 on edges
+  cv::Mat orientation;  // CV_8U, gradient direction bin (mod π)
+};
+
+EdgeData Edges(const Image8& im, const FeatureParams& p) {
+  cv::Mat g = Grey(im);
+  if (p.blur_sigma > 0) cv::GaussianBlur(g, g, cv::Size(0, 0), p.blur_sigma);
+  EdgeData e;
+  cv::Canny(g, e.edges, p.canny_low, p.canny_high, 3, true);
+  cv::Mat gx, gy;
+  cv::Sobel(g, gx, CV_32F, 1, 0, 3);
+  cv::Sobel(g, gy, CV_32F, 0, 1, 3);
+  e.orientation = cv::Mat(g.size(), CV_8U);
+  for (int y = 0; y < g.rows; ++y)
+    for (int x = 0; x < g.cols; ++x) {
+      double a = std::atan2(gy.at<float>(y, x), gx.at<float>(y, x));
+      if (a < 0) a += M_PI;  // mod π: edges have no sign (light/dark may differ between images)
+      e.orientation.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(std::min(p.orientation_bins - 1, static_cast<int>(a / M_PI * p.orientation_bins)));
+    }
+  return e;
+}
+
+// Harris corners of an edge image: local maxima above a share of the maximum, strongest first,
+// at least min_distance apart. `keep` filters candidates (virtual: on the object).
+std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p, const std::vector<std::uint8_t>* mask,
+                                std::vector<Vec2>* rejected) {
+  cv::Mat f, response;
+  edges.convertTo(f, CV_32F, 1.0 / 255.0);
+  cv::cornerHarris(f, response, p.harris_block, 3, p.harris_k);
+  double max_r = 0.0;
+  cv::minMaxLoc(response, nullptr, &max_r);
+  if (!(max_r > 0)) return {};
+  cv::Mat dilated;
+  cv::dilate(response, dilated, cv::Mat::ones(5, 5, CV_8U));
+  struct Candidate {
+    float r;
+    int x, y;
+  };
+  std::vector<Candidate> cands;
+  for (int y = 0; y < response.rows; ++y)
+    for (int x = 0; x < response.cols; ++x) {
+      const float r = response.at<float>(y, x);
+      if (r >= p.harris_relative * max_r && r >= dilated.at<float>(y, x)) cands.push_back({r, x, y});
+    }
+  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.r > b.r; });
+  std::vector<Vec2> out;
+  for (const Candidate& c : cands) {
+    const Vec2 pt(c.x, c.y);
+    const bool on_object = mask == nullptr || (*mask)[std::size_t(c.y) * edges.cols + c.x] != 0;
+    bool far = true;
+    for (const Vec2& q : out) far = far && (q - pt).norm() >= p.min_corner_distance;
+    if (on_object && far && static_cast<int>(out.size()) < p.max_corners) out.push_back(pt);
+    else if (rejected) rejected->push_back(pt);
+  }
+  return out;
+}
+
+}  // namespace
+
+MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const std::vector<std::uint8_t>* object_mask,
+                          const FeatureParams& p) {
+  p.Validate();
+  INHAND_CHECK(real.width == virtual_image.width && real.height == virtual_image.height, "images of different sizes");
+  MatchResult result;
+  MatchDebug& dbg = result.debug;
+  // 1. Canny.
+  const EdgeData re = Edges(real, p), ve = Edges(virtual_image, p);
+  dbg.real_edges = ToImage(re.edges);
+  dbg.virtual_edges = ToImage(ve.edges);
+  // The object mask, grown a little: silhouette edges lie on its border.
+  std::vector<std::uint8_t> grown;
+  if (object_mask) {
+    cv::Mat m(virtual_image.height, virtual_image.width, CV_8U, const_cast<std::uint8_t*>(object_mask->data())), g;
+    cv::dilate(m, g, cv::Mat::ones(5, 5, CV_8U));
+    grown.assign(g.data, g.data + g.total());
+  }
+  // 2. Harris on the edge images.
+  dbg.real_corners = HarrisCorners(re.edges, p, nullptr, nullptr);
+  dbg.virtual_corners = HarrisCorners(ve.edges, p, object_mask ? &grown : nullptr, &dbg.virtual_corners_rejected);
+  const int W = real.width, H = real.height, R = p.piece_radius, S = p.search_radius;
+  // 3. Contour pieces: virtual edge pixels around each corner (offsets and orientation bins).
+  struct PieceEdge {
+    int dx, dy, bin;
+  };
+  std::vector<std::vector<PieceEdge>> pieces(dbg.virtual_corners.size());
+  dbg.pieces.resize(dbg.virtual_corners.size());
+  for (std::size_t i = 0; i < dbg.virtual_corners.size(); ++i) {
+    const int cx = static_cast<int>(dbg.virtual_corners[i].x()), cy = static_cast<int>(dbg.virtual_corners[i].y());
+    for (int dy = -R; dy <= R; ++dy)
+      for (int dx = -R; dx <= R; ++dx) {
+        const int x = cx + dx, y = cy + dy;
+        if (dx * dx + dy * dy > R * R || x < 0 || y < 0 || x >= W || y >= H) continue;
+        if (!ve.edges.at<std::uint8_t>(y, x)) continue;
+        pieces[i].push_back({dx, dy, ve.orientation.at<std::uint8_t>(y, x)});
+        dbg.pieces[i].emplace_back(dx, dy);
+      }
+  }
+  // 4. Generalized Hough transform, local: each real edge pixel near the corner votes for the
+  // corner positions that would put one of the piece's edge pixels (same orientation) on it.
+  dbg.votes.resize(dbg.virtual_corners.size());
+  const int A = 2 * S + 1;
+  std::vector<int> acc(static_cast<std::size_t>(A * A));
+  for (std::size_t i = 0; i < dbg.virtual_corners.size(); ++i) {
+    if (static_cast<int>(pieces[i].size()) < p.min_piece_pixels) {
+      dbg.piece_rejected.push_back(static_cast<int>(i));
+      continue;
+    }
+    const int cx = static_cast<int>(dbg.virtual_corners[i].x()), cy = static_cast<int>(dbg.virtual_corners[i].y());
+    std::fill(acc.begin(), acc.end(), 0);
+    for (const PieceEdge& e : pieces[i]) {
+      for (int sy = -S; sy <= S; ++sy) {
+        const int y = cy + e.dy + sy;
+        if (y < 0 || y >= H) continue;
+        const std::uint8_t* row = re.edges.ptr<std::uint8_t>(y);
+        const std::uint8_t* orow = re.orientation.ptr<std::uint8_t>(y);
+        for (int sx = -S; sx <= S; ++sx) {
+          const int x = cx + e.dx + sx;
+          if (x < 0 || x >= W || !row[x]) continue;
+          const int d = std::abs(orow[x] - e.bin);
+          if (std::min(d, p.orientation_bins - d) > 0) continue;  // orientation must agree
+          ++acc[static_cast<std::size_t>((sy + S) * A + (sx + S))];
+        }
+      }
+    }
+    // Peak (ties broken towards the smallest shift: deterministic), refined by a 3x3 centroid.
+    int best = -1, bx = 0, by = 0;
+    for (int sy = -S; sy <= S; ++sy)
+      for (int sx = -S; sx <= S; ++sx) {
+        const int v = acc[static_cast<std::size_t>((sy + S) * A + (sx + S))];
+        if (v > best || (v == best && sx * sx + sy * sy < bx * bx + by * by)) best = v, bx = sx, by = sy;
+      }
+    double wsum = 0, mx = 0, my = 0;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int sx = bx + dx, sy = by + dy;
+        if (std::abs(sx) > S || std::abs(sy) > S) continue;
+        const double v = acc[static_cast<std::size_t>((sy + S) * A + (sx + S))];
+        wsum += v, mx += v * sx, my += v * sy;
+      }
+    Image8 votes(A, A, 1);
+    for (int k = 0; k < A * A; ++k)
+      votes.data[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(best > 0 ? 255 * acc[static_cast<std::size_t>(k)] / best : 0);
+    dbg.votes[i] = votes;
+    const double fraction = double(best) / double(pieces[i].size());
+    if (fraction < p.min_vote_fraction) {
+      dbg.vote_rejected.push_back(static_cast<int>(i));
+      continue;
+    }
+    FeatureMatch m;
+    m.id = static_cast<int>(i);
+    m.virtual_px = dbg.virtual_corners[i];
+    m.real_px = m.virtual_px + Vec2(mx / wsum, my / wsum);
+    m.vote_fraction = fraction;
+    result.matches.push_back(m);
+  }
+  // 5. RANSAC: a 2-D similarity (4 DoF) from two matches, the largest consensus wins; refit on it.
+  const std::size_t n = result.matches.size();
+  if (n >= 2) {
+    std::mt19937 rng(p.seed);
+    std::uniform_int_distribution<std::size_t> pick(0, n - 1);
+    const auto fit = [&](const std::vector<std::size_t>& idx) {
+      // Least squares over [a -b tx; b a ty].
+      Eigen::MatrixXd M(2 * idx.size(), 4);
+      Eigen::VectorXd b(2 * idx.size());
+      for (std::size_t k = 0; k < idx.size(); ++k) {
+        const Vec2& v = result.matches[idx[k]].virtual_px;
+        const Vec2& r = result.matches[idx[k]].real_px;
+        M.row(2 * k) << v.x(), -v.y(), 1, 0;
+        M.row(2 * k + 1) << v.y(), v.x(), 0, 1;
+        b.segment<2>(2 * k) = r;
+      }
+      const Eigen::Vector4d s = M.colPivHouseholderQr().solve(b);
+      Eigen::Matrix<double, 2, 3> T;
+      T << s[0], -s[1], s[2], s[1], s[0], s[3];
+      return T;
+    };
+    const auto residual = [&](const Eigen::Matrix<double, 2, 3>& T, const FeatureMatch& m) {
+      return (T.leftCols<2>() * m.virtual_px + T.col(2) - m.real_px).norm();
+    };
+    std::vector<std::size_t> best_set;
+    for (int it = 0; it < p.ransac_iterations; ++it) {
+      const std::size_t a = pick(rng), b = pick(rng);
+      if (a == b || (result.matches[a].virtual_px - result.matches[b].virtual_px).norm() < 5.0) continue;
+      const auto T = fit({a, b});
+      std::vector<std::size_t> set;
+      for (std::size_t k = 0; k < n; ++k)
+        if (residual(T, result.matches[k]) < p.ransac_threshold) set.push_back(k);
+      if (set.size() > best_set.size()) best_set = set;
+    }
+    if (best_set.size() >= 2) {
+      dbg.similarity = fit(best_set);
+      for (std::size_t k = 0; k < n; ++k) result.matches[k].inlier = residual(dbg.similarity, result.matches[k]) < p.ransac_threshold;
+    }
+  } else if (n == 1) {
+    result.matches[0].inlier = false;  // one match cannot be checked against anything
+  }
+  return result;
+}
+
+}  // namespace inhand

@@ -1,0 +1,106 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iostream>
+
+#include "inhand/contacts/bullet_contact_query.hpp"
+#include "inhand/core/error.hpp"
+#include "inhand/features/extracted.hpp"
+#include "inhand/filter/filter.hpp"
+#include "inhand/io/object_loader.hpp"
+#include "inhand/io/urdf_loader.hpp"
+#include "inhand/renderer/views.hpp"
+#include "test_support.hpp"
+
+namespace inhand {
+namespace {
+
+struct Pair {
+  ObjectModel object = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  Renderer renderer;
+  std::vector<int> meshes = UploadObject(renderer, object);
+  Intrinsics K = IntrinsicsFromFov(640, 480, 40);
+  Transform T_PC = LookAt(Vec3(0.02, -0.32, 0.16), Vec3(0, 0, 0.09), Vec3::UnitZ());
+  RenderOutput Render(const Transform& T_PO) {
+    Scene s;
+    s.K = K;
+    s.T_PC = T_PC;
+    s.background = Vec3(0.45, 0.5, 0.55);
+    AddObject(s, meshes, T_PO);
+    RenderOutput out;
+    renderer.Render(s, out, true);
+    return out;
+  }
+};
+
+TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
+  Pair p;
+  const Transform T_true = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, 0.15)));
+  const Transform T_est = MakeTransform(Vec3(0.004, -0.002, 0.003), ExpSO3(Vec3(0.01, -0.015, 0.02))) * T_true;
+  const RenderOutput real = p.Render(T_true);
+  const RenderOutput virt = p.Render(T_est);
+  std::vector<std::uint8_t> mask(virt.label.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = virt.label[i] == kObjectLabel;
+  const MatchResult r = MatchFeatures(real.colour, virt.colour, &mask, FeatureParams());
+  ASSERT_GE(r.num_inliers(), 6) << r.matches.size() << " matches";
+  // Every stage reported what it did.
+  EXPECT_EQ(r.debug.real_edges.width, 640);
+  EXPECT_FALSE(r.debug.virtual_corners.empty());
+  EXPECT_EQ(r.debug.pieces.size(), r.debug.virtual_corners.size());
+
+  // The matched pixel is where the object point seen at the virtual pixel really projects.
+  std::vector<double> errors;
+  std::vector<VisualFeature> features;
+  const Transform T_CP = p.T_PC.inverse();
+  for (const FeatureMatch& m : r.matches) {
+    if (!m.inlier) continue;
+    const int x = static_cast<int>(std::lround(m.virtual_px.x())), y = static_cast<int>(std::lround(m.virtual_px.y()));
+    const float z = virt.depth_at(x, y);
+    if (!std::isfinite(z)) continue;
+    const Vec3 X_P = p.T_PC * p.K.Unproject(m.virtual_px, z);
+    const Vec3 x_O = T_est.inverse() * X_P;
+    const Vec2 truth = p.K.Project(T_CP * (T_true * x_O));
+    errors.push_back((truth - m.real_px).norm());
+    features.push_back({m.id, x_O, m.real_px});
+  }
+  ASSERT_GE(errors.size(), 6u);
+  std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 1.5) << "median pixel error of the matches";
+
+  // The visual update removes most of the offset.
+  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  BulletContactQuery query(hand, p.object);
+  FilterParams params;
+  params.pixel_sigma = 1.5;
+  Filter filter(hand, query, params, false);
+  filter.Reset(T_est, Eigen::VectorXd::Zero(hand.num_q()), 0.02, 0.087, 0.0);
+  const double before = (T_est.translation() - T_true.translation()).norm();
+  const double rot_before = RotationDistance(T_est.linear(), T_true.linear());
+  EXPECT_GE(filter.UpdateVisual(features, p.T_PC, p.K), 6);
+  const double after = (filter.position() - T_true.translation()).norm();
+  const double rot_after = RotationDistance(filter.rotation(), T_true.linear());
+  std::cout << "  " << r.num_inliers() << " inliers of " << r.matches.size() << " matches, median error "
+            << errors[errors.size() / 2] << " px; position error " << before * 1000 << " -> " << after * 1000
+            << " mm, orientation " << rot_before * 180 / M_PI << " -> " << rot_after * 180 / M_PI << " deg\n";
+  EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
+  EXPECT_LT(rot_after, rot_before) << rot_before << " -> " << rot_after;
+}
+
+TEST(ExtractedFeatures, IdenticalImagesMatchInPlaceAndBadParametersAreRejected) {
+  Pair p;
+  const RenderOutput a = p.Render(Transform::Identity());
+  std::vector<std::uint8_t> mask(a.label.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = a.label[i] == kObjectLabel;
+  const MatchResult r = MatchFeatures(a.colour, a.colour, &mask, FeatureParams());
+  ASSERT_GT(r.num_inliers(), 3);
+  for (const FeatureMatch& m : r.matches)
+    if (m.inlier) {
+      EXPECT_LT((m.real_px - m.virtual_px).norm(), 0.5);
+    }
+  FeatureParams bad;
+  bad.canny_high = 10;
+  EXPECT_THROW(MatchFeatures(a.colour, a.colour, &mask, bad), InputError);
+}
+
+}  // namespace
+}  // namespace inhand
