@@ -51,6 +51,12 @@ int main(int argc, char** argv) {
   tags_cmd->add_option("--refine-edges", tags.refine_edges, "refine quad edges (0 or 1)")->capture_default_str();
   tags_cmd->add_flag("--json", tags.json, "print JSON");
 
+  inhand::app::MatchCommand match;
+  auto* match_cmd = cli.add_subcommand("match", "Debug the extracted-feature matching of one camera frame (PNG per stage + JSON)");
+  match_cmd->add_option("SESSION", match.session, "session directory")->required();
+  match_cmd->add_option("--frame", match.frame, "camera frame index")->required();
+  match_cmd->add_option("--out", match.out, "output directory")->required();
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -62,6 +68,7 @@ int main(int argc, char** argv) {
     if (*simulate_cmd) return inhand::app::RunSimulate(simulate);
     if (*replay_cmd) return inhand::app::RunReplay(replay);
     if (*tags_cmd) return inhand::app::RunTags(tags);
+    if (*match_cmd) return inhand::app::RunMatch(match);
   } catch (const inhand::InputError& e) {
     std::cerr << "inhand: error: " << e.what() << "\n";
     return 2;

@@ -18,8 +18,7 @@ std::vector<ModalitySet> ParseModalities(const std::string& list) {
     if (name == "j") out.push_back({"j", false, false, false, kColourJoints});
     else if (name == "jt") out.push_back({"jt", true, false, false, kColourTorques});
     else if (name == "jta") out.push_back({"jta", true, true, false, kColourTags});
-    else if (name == "jtf")
-      throw InputError("--modalities: 'jtf' (extracted features) is not available in this build yet; use j, jt, jta");
+    else if (name == "jtf") out.push_back({"jtf", true, false, true, kColourFeatures});
     else throw InputError("--modalities: unknown set '" + name + "', expected j, jt, jta or jtf");
   }
   if (out.empty()) throw InputError("--modalities: empty list");
@@ -29,7 +28,7 @@ std::vector<ModalitySet> ParseModalities(const std::string& list) {
 std::vector<ModalitySet> DefaultModalities(const Session& session) {
   // Tags need images; whether the object carries tags is known once the models are loaded, and
   // a jta filter without tags simply equals jt.
-  return ParseModalities(session.info().camera ? "j,jt,jta" : "j,jt");
+  return ParseModalities(session.info().camera ? "j,jt,jta,jtf" : "j,jt");
 }
 
 Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets)
@@ -40,8 +39,14 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
     filters_.push_back(std::make_unique<Filter>(models_.hand, *queries_.back(), params_, s.torque));
   }
   last_.resize(sets_.size());
-  bool tags = false;
-  for (const ModalitySet& m : sets_) tags = tags || m.tags;
+  bool tags = false, features = false;
+  for (const ModalitySet& m : sets_) tags = tags || m.tags, features = features || m.features;
+  if (features) {
+    if (!session_.info().camera) throw InputError(session_.dir() + ": modality jtf needs camera images, the session has none");
+    renderer_ = std::make_unique<Renderer>();
+    hand_meshes_ = UploadHand(*renderer_, models_.hand);
+    object_meshes_ = UploadObject(*renderer_, models_.object);
+  }
   if (tags) {
     if (!session_.info().camera) throw InputError(session_.dir() + ": modality jta needs camera images, the session has none");
     if (models_.object.tags.empty())
@@ -84,6 +89,8 @@ void Pipeline::Step(int k) {
     last_frame_ = f;
     image_ = session_.LoadImage(f);
     tags_.clear();
+    for (std::size_t i = 0; i < filters_.size(); ++i)
+      if (sets_[i].features) FeatureUpdate(i, f);
     if (!tag_detector_) continue;
     const Intrinsics& K = *info.camera;
     const auto start = std::chrono::steady_clock::now();
@@ -113,6 +120,49 @@ void Pipeline::Step(int k) {
       r.orientation_error = RotationDistance(r.T_PO.linear(), gt.linear());
     }
   }
+}
+
+void Pipeline::FeatureUpdate(std::size_t set, int frame) {
+  Filter& f = *filters_[set];
+  const Intrinsics& K = *session_.info().camera;
+  const CameraFrame& cf = session_.camera_frames()[static_cast<std::size_t>(frame)];
+  const auto start = std::chrono::steady_clock::now();
+  // The virtual image: the scene as this filter believes it, from the camera.
+  FeatureStep& fs = feature_step_;
+  fs.frame = frame;
+  Scene scene;
+  scene.K = K;
+  scene.T_PC = cf.T_PC;
+  scene.background = Vec3(0.5, 0.5, 0.5);
+  AddHand(scene, hand_meshes_, f.kinematics().link_poses());
+  AddObject(scene, object_meshes_, f.T_PO());
+  renderer_->Render(scene, fs.virtual_view, true);
+  std::vector<std::uint8_t> mask(fs.virtual_view.label.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = fs.virtual_view.label[i] == kObjectLabel;
+  fs.match = MatchFeatures(image_, fs.virtual_view.colour, &mask, feature_params_);
+  // Inliers to object points through the virtual depth, moved into O with the estimate.
+  const Transform T_OP = f.T_PO().inverse();
+  features_.clear();
+  fs.used_match.clear();
+  for (std::size_t m = 0; m < fs.match.matches.size(); ++m) {
+    const FeatureMatch& match = fs.match.matches[m];
+    if (!match.inlier) continue;
+    const int x = static_cast<int>(std::lround(match.virtual_px.x())), y = static_cast<int>(std::lround(match.virtual_px.y()));
+    if (x < 0 || y < 0 || x >= K.width || y >= K.height || !mask[std::size_t(y) * K.width + x]) continue;
+    const float z = fs.virtual_view.depth_at(x, y);
+    if (!std::isfinite(z)) continue;
+    const Vec3 X_P = cf.T_PC * K.Unproject(match.virtual_px, z);
+    features_.push_back({match.id, T_OP * X_P, K.Undistort(match.real_px)});
+    fs.used_match.push_back(static_cast<int>(m));
+  }
+  const Transform T_CP = cf.T_PC.inverse();
+  fs.residual_before.clear();
+  for (const VisualFeature& v : features_) fs.residual_before.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
+  last_[set].visual_used = f.UpdateVisual(features_, cf.T_PC, K);
+  fs.residual_after.clear();
+  for (const VisualFeature& v : features_) fs.residual_after.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
+  last_[set].visual_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  last_[set].T_PO = f.T_PO();
 }
 
 namespace {

@@ -167,7 +167,7 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
           const int x = cx + e.dx + sx;
           if (x < 0 || x >= W || !row[x]) continue;
           const int d = std::abs(orow[x] - e.bin);
-          if (std::min(d, p.orientation_bins - d) > 0) continue;  // orientation must agree
+          if (std::min(d, p.orientation_bins - d) > 1) continue;  // orientation must agree (±1 bin)
           ++acc[static_cast<std::size_t>((sy + S) * A + (sx + S))];
         }
       }

@@ -158,7 +158,7 @@ TEST(Cli, ReplayEndToEnd) {
     EXPECT_TRUE(std::filesystem::exists(dir / ("replay/" + std::string(f)))) << f;
   std::ifstream in(dir / "replay/summary.json");
   const Json s = Json::parse(in);
-  for (const char* set : {"j", "jt"}) {
+  for (const char* set : {"j", "jt", "jta", "jtf"}) {
     const Json& m = s.at("modalities").at(set);
     // Noise-free session: the estimate starts at the truth and stays within a few centimetres.
     EXPECT_TRUE(std::isfinite(m.at("terminal_position_error_mm").get<double>()));
@@ -205,6 +205,7 @@ TEST(Cli, ReplayRejectsBadInputWithoutPartialOutput) {
   const test::CommandResult missing = test::RunInhand("replay " + (dir / "nowhere") + " --out " + (dir / "out"));
   EXPECT_EQ(missing.exit_code, 2);
   const test::CommandResult sets = test::RunInhand("replay " + ShortSession() + " --modalities j,xyz --out " + (dir / "out"));
+  EXPECT_NE(sets.output.find("expected j, jt, jta or jtf"), std::string::npos) << sets.output;
   EXPECT_EQ(sets.exit_code, 2);
   EXPECT_NE(sets.output.find("xyz"), std::string::npos);
   dir.Write("p.json", "{\"contact_sigma\": -1}");
@@ -246,6 +247,33 @@ TEST(Cli, TagsJsonReproducesTheUpstreamCorners) {
   EXPECT_TRUE(found) << line;
   EXPECT_EQ(test::RunInhand("tags " + image + " --refine-edges 3").exit_code, 2);
   EXPECT_EQ(test::RunInhand("tags /nonexistent.png").exit_code, 2);
+}
+
+}  // namespace
+}  // namespace inhand
+
+namespace inhand {
+namespace {
+
+TEST(Cli, MatchWritesEveryStage) {
+  test::TempDir dir;
+  const test::CommandResult r = test::RunInhand("match " + ShortSession() + " --frame 30 --out " + (dir / "m"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"camera.png", "virtual.png", "edges_camera.png", "edges_virtual.png", "corners_camera.png",
+                        "corners_virtual.png", "pieces.png", "hough_votes.png", "matches.png", "stages.png", "matches.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / ("m/" + std::string(f)))) << f;
+  std::ifstream in(dir / "m/matches.json");
+  const Json j = Json::parse(in);
+  EXPECT_GT(j.at("virtual_corners").get<int>(), 5);
+  EXPECT_GT(j.at("inliers").get<int>(), 2);
+  double before = 0, after = 0;
+  int used = 0;
+  for (const Json& m : j.at("list"))
+    if (m.at("used").get<bool>()) before += m.at("residual_before_px").get<double>(), after += m.at("residual_after_px").get<double>(), ++used;
+  ASSERT_GT(used, 2);
+  EXPECT_LE(after, before + 1e-9);  // the update does not move the features away
+  EXPECT_EQ(test::RunInhand("match " + ShortSession() + " --frame 100000 --out " + (dir / "x")).exit_code, 2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x"));
 }
 
 }  // namespace

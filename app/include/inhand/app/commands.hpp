@@ -54,4 +54,12 @@ struct TagsCommand {
 };
 int RunTags(const TagsCommand& cmd);
 
+struct MatchCommand {
+  std::string session;
+  int frame = 0;
+  std::string out;
+};
+// Runs jtf up to camera frame K and writes every matching stage as PNG plus matches.json.
+int RunMatch(const MatchCommand& cmd);
+
 }  // namespace inhand::app

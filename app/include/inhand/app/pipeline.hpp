@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "inhand/contacts/bullet_contact_query.hpp"
+#include "inhand/features/extracted.hpp"
 #include "inhand/features/tags.hpp"
 #include "inhand/filter/filter.hpp"
 #include "inhand/renderer/overlay.hpp"
@@ -53,6 +54,18 @@ class Pipeline {
   int last_frame() const { return last_frame_; }
   const Image8& last_image() const { return image_; }
   const std::vector<TagDetection>& last_tags() const { return tags_; }
+  // The extracted-feature step of the last frame (sets with features): the virtual image, the
+  // matches with every stage's output, and each used feature's pixel residual before and after
+  // the update.
+  struct FeatureStep {
+    int frame = -1;
+    RenderOutput virtual_view;
+    MatchResult match;
+    std::vector<int> used_match;      // index into match.matches of each feature used
+    std::vector<double> residual_before, residual_after;  // [px]
+  };
+  const FeatureStep& last_feature_step() const { return feature_step_; }
+  FeatureParams& feature_params() { return feature_params_; }
   const std::vector<ModalitySet>& sets() const { return sets_; }
   const Filter& filter(std::size_t i) const { return *filters_[i]; }
   const EstimateRecord& last(std::size_t i) const { return last_[i]; }
@@ -74,6 +87,12 @@ class Pipeline {
   Image8 image_;
   std::vector<TagDetection> tags_;
   std::vector<VisualFeature> features_;
+  std::unique_ptr<Renderer> renderer_;
+  HandMeshes hand_meshes_;
+  std::vector<int> object_meshes_;
+  FeatureParams feature_params_;
+  FeatureStep feature_step_;
+  void FeatureUpdate(std::size_t set, int frame);
 };
 
 // The annotated pictures of one camera frame: camera image with overlays | virtual view at the

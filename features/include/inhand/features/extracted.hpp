@@ -30,8 +30,8 @@ struct FeatureParams {
   int piece_radius = 14;             // [px] contour piece: edge pixels within this radius
   int min_piece_pixels = 12;         // pieces with fewer edge pixels are rejected
   int search_radius = 30;            // [px] local Hough search around the virtual corner
-  int orientation_bins = 8;          // gradient-direction bins (mod π) that must agree to vote
-  double min_vote_fraction = 0.45;   // votes of the peak over the piece's pixels
+  int orientation_bins = 12;         // gradient-direction bins (mod π); neighbours may vote
+  double min_vote_fraction = 0.35;   // votes of the peak over the piece's pixels
   double ransac_threshold = 2.5;     // [px]
   int ransac_iterations = 300;
   unsigned seed = 1;
