@@ -78,8 +78,7 @@ std::vector<Scenario> Build() {
               Key(5.2, Lifted(grasp, 0.12), closed, kGrip), Key(6.0, Lifted(grasp, 0.12), closed, kGrip)};
     s.close_start = 1.2;
     s.grasp_closed = 2.6;
-    s.camera_eye = Vec3(0.30, -0.45, 0.40);
-    s.camera_target = Vec3(0.0, 0.0, 0.12);
+    s.camera_target = Vec3(0.0, 0.0, 0.17);
     s.initial_error_direction_W = Vec3(0, 0, 1);  // "20 mm too high", as in Exp. I
     all.push_back(s);
   }

@@ -20,7 +20,7 @@ struct Scenario {
   std::string description;
   std::string object;                      // folder under assets/objects
   Transform T_WO = Transform::Identity();  // object on the table at t = 0
-  Vec3 camera_eye = Vec3(0.35, -0.5, 0.45);
+  Vec3 camera_eye = Vec3(0.25, -0.36, 0.33);
   Vec3 camera_target = Vec3(0.0, 0.0, 0.1);
   std::vector<Keyframe> keys;
   double grasp_closed = 0.0;               // [s] when the fingers have closed (for checks)

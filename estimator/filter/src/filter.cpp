@@ -176,6 +176,12 @@ void Filter::Commit() {
   delta_.setZero();
 }
 
+double Filter::CandidateWeight(double distance) const {
+  if (params_.torque_distance_scale <= 0.0) return 1.0;  // the paper: plain (J_cᵀ)⁺
+  const double d = std::max(distance, 0.0) / params_.torque_distance_scale;
+  return 1.0 + d * d;
+}
+
 void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int iteration) {
   q_eff_ = q_prev_ + b_;
   kin_.Update(hand_, q_eff_);
@@ -189,7 +195,7 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
   const bool torque = use_torque_ && k > 0;
   if (torque) {
     JtJ_.setZero();
-    for (std::size_t i = 0; i < k; ++i) JtJ_.noalias() += Jc_[i].transpose() * Jc_[i];
+    for (std::size_t i = 0; i < k; ++i) JtJ_.noalias() += (1.0 / CandidateWeight(pairs_[i].distance)) * (Jc_[i].transpose() * Jc_[i]);
     JtJ_.diagonal().array() += params_.torque_damping;
     ldlt_.compute(JtJ_);
     y_ = ldlt_.solve(tau);
@@ -207,7 +213,7 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
     rec.c_o_P = pair.c_o_P;
     rec.c_f_P = pair.c_f_P;
     rec.normal_P = pair.normal_P;
-    if (torque) rec.force_P = Jc_[i] * y_;
+    if (torque) rec.force_P = (1.0 / CandidateWeight(pair.distance)) * (Jc_[i] * y_);
     if (pair.distance < 0.0) {
       rec.kind = ContactKind::kKinematic;
     } else if (torque) {

@@ -35,6 +35,7 @@ const std::vector<Field>& Fields() {
       {"friction_cone_deg", &FilterParams::friction_cone_deg, nullptr, nullptr, 0.0, 90.0, true, "in (0, 90] degrees"},
       {"force_min", &FilterParams::force_min, nullptr, nullptr, 0.0, 1e4, false, "in [0, 1e4] N"},
       {"torque_damping", &FilterParams::torque_damping, nullptr, nullptr, 0.0, 1.0, true, "in (0, 1]"},
+      {"torque_distance_scale", &FilterParams::torque_distance_scale, nullptr, nullptr, 0.0, 1.0, false, "in [0, 1] m (0: the paper's pseudo-inverse)"},
       {"twist_damping", &FilterParams::twist_damping, nullptr, nullptr, 0.0, 1.0, true, "in (0, 1]"},
       {"process_position", &FilterParams::process_position, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10] m/sqrt(s)"},
       {"process_orientation", &FilterParams::process_orientation, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10] rad/sqrt(s)"},

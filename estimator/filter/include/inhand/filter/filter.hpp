@@ -111,6 +111,7 @@ class Filter {
     Vec3 c_f_L;  // contact point in the link frame
   };
   void ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int iteration);
+  double CandidateWeight(double distance) const;
 
   const HandModel& hand_;
   ContactQuery& contacts_;

@@ -20,6 +20,10 @@ struct FilterParams {
   double friction_cone_deg = 45.0;            // [deg] half-angle around the inward normal
   double force_min = 2.0;                     // [N] smaller estimated forces are ignored
   double torque_damping = 1e-6;               // [m²] damping of (J_cᵀ)⁺
+  double torque_distance_scale = 0.0;         // [m] > 0: weighted pseudo-inverse, a candidate at
+                                              // distance d costs (1 + (d/scale)²) per unit force,
+                                              // so torques are explained by touching links first
+                                              // (beyond the paper); 0: the paper's (J_cᵀ)⁺
   // --- prediction
   double twist_damping = 1e-8;                // damping of the grasp-map pseudo-inverse
   double process_position = 0.002;            // [m/√s] random walk of the object position
