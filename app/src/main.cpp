@@ -1,5 +1,7 @@
 // inhand: command-line entry. Parsing only (CLI11 is slow to compile: keep it in this file).
 #include <CLI/CLI.hpp>
+#include <unistd.h>
+
 #include <iostream>
 
 #include "inhand/app/commands.hpp"
@@ -57,6 +59,17 @@ int main(int argc, char** argv) {
   match_cmd->add_option("--frame", match.frame, "camera frame index")->required();
   match_cmd->add_option("--out", match.out, "output directory")->required();
 
+  inhand::app::EvaluateCommand evaluate;
+  auto* evaluate_cmd = cli.add_subcommand("evaluate", "Simulate and replay every scenario x seed: Table I and Fig.-7 plots");
+  evaluate_cmd->add_option("--out", evaluate.out, "output directory")->required();
+  evaluate_cmd->add_option("--scenarios", evaluate.scenarios, "comma-separated scenarios (default: all)");
+  evaluate_cmd->add_option("--seeds", evaluate.seeds, "seeds per scenario")->capture_default_str();
+  evaluate_cmd->add_option("--noise", evaluate.noise, "noise profile: paper or hard")->capture_default_str();
+  evaluate_cmd->add_option("--jobs", evaluate.jobs, "runs in parallel")->capture_default_str();
+  evaluate_cmd->add_flag("--plan", evaluate.plan, "write plan.txt (one command per run) and stop");
+  evaluate_cmd->add_flag("--merge", evaluate.merge, "only build tables and plots from existing runs");
+  evaluate_cmd->add_flag("--keep-sessions", evaluate.keep_sessions, "keep the simulated images");
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -69,6 +82,11 @@ int main(int argc, char** argv) {
     if (*replay_cmd) return inhand::app::RunReplay(replay);
     if (*tags_cmd) return inhand::app::RunTags(tags);
     if (*match_cmd) return inhand::app::RunMatch(match);
+    if (*evaluate_cmd) {
+      char self[4096];
+      const ssize_t n = ::readlink("/proc/self/exe", self, sizeof(self) - 1);
+      return inhand::app::RunEvaluate(evaluate, n > 0 ? std::string(self, static_cast<std::size_t>(n)) : std::string(argv[0]));
+    }
   } catch (const inhand::InputError& e) {
     std::cerr << "inhand: error: " << e.what() << "\n";
     return 2;

@@ -118,6 +118,13 @@ void Pipeline::Step(int k) {
       const Transform gt = session_.GroundTruthAt(t);
       r.position_error = (r.T_PO.translation() - gt.translation()).norm();
       r.orientation_error = RotationDistance(r.T_PO.linear(), gt.linear());
+      // Normalised estimation error squared of the pose, in the filter's error convention
+      // (p = p̂ + δp, R = Exp(δθ) R̂).
+      Vec6 e;
+      e.head<3>() = gt.translation() - r.T_PO.translation();
+      e.tail<3>() = LogSO3(gt.linear() * r.T_PO.linear().transpose());
+      const Mat6 P = filters_[i]->covariance().topLeftCorner<6, 6>();
+      r.nees = e.dot(P.ldlt().solve(e));
     }
   }
 }

@@ -65,6 +65,7 @@ double Percentile(std::vector<double> v, double p) {
 }
 
 struct SetStats {
+  std::vector<double> nees;
   std::vector<double> step_us;
   std::vector<double> visual_ms;
   long features_used = 0;
@@ -125,6 +126,7 @@ int RunReplay(const ReplayCommand& cmd) {
       if (k > 0) st.step_us.push_back(r.step_time_us);
       if (r.visual_ms >= 0.0) st.visual_ms.push_back(r.visual_ms), st.features_used += r.visual_used;
       st.constraints += r.constraints;
+      if (std::isfinite(r.nees)) st.nees.push_back(r.nees);
       if (std::isfinite(r.position_error)) {
         st.sq_pos += r.position_error * r.position_error;
         st.sq_ori += r.orientation_error * r.orientation_error;
@@ -181,6 +183,12 @@ int RunReplay(const ReplayCommand& cmd) {
       s["terminal_orientation_error_deg"] = st.last.orientation_error * 180 / M_PI;
       s["rms_position_error_mm"] = std::sqrt(st.sq_pos / st.with_truth) * 1000;
       s["rms_orientation_error_deg"] = std::sqrt(st.sq_ori / st.with_truth) * 180 / M_PI;
+      // Consistency: the NEES of a consistent filter follows χ²₆ (mean 6; 95 % in [1.24, 14.45]).
+      double mean = 0.0;
+      long inside = 0;
+      for (double v : st.nees) mean += v, inside += v >= 1.237 && v <= 14.449;
+      s["nees_mean"] = st.nees.empty() ? 0.0 : mean / static_cast<double>(st.nees.size());
+      s["nees_within_95_percent_bounds"] = st.nees.empty() ? 0.0 : double(inside) / static_cast<double>(st.nees.size());
     }
     per_set[sets[i].name] = s;
   }

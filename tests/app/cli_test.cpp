@@ -278,3 +278,34 @@ TEST(Cli, MatchWritesEveryStage) {
 
 }  // namespace
 }  // namespace inhand
+
+namespace inhand {
+namespace {
+
+TEST(Cli, EvaluatePlansRunsAndMerges) {
+  test::TempDir dir;
+  // --plan: one command line per run, nothing executed.
+  const test::CommandResult plan = test::RunInhand("evaluate --out " + (dir / "p") + " --seeds 3 --scenarios ketchup-power-grasp,shampoo-grasp --plan");
+  ASSERT_EQ(plan.exit_code, 0) << plan.output;
+  std::ifstream in(dir / "p/plan.txt");
+  int lines = 0;
+  for (std::string line; std::getline(in, line);) lines += line.find(" simulate ") != std::string::npos;
+  EXPECT_EQ(lines, 6);
+  // A real (small) evaluation: one seed of one scenario.
+  const test::CommandResult run = test::RunInhand("evaluate --out " + (dir / "e") + " --seeds 1 --scenarios ketchup-power-grasp");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream t(dir / "e/table1.json");
+  const Json table = Json::parse(t);
+  for (const char* set : {"j", "jt", "jta", "jtf"}) {
+    const Json& cell = table.at("ketchup-power-grasp").at(set);
+    EXPECT_EQ(cell.at("runs"), 1);
+    EXPECT_TRUE(std::isfinite(cell.at("position_mm_mean").get<double>()));
+    EXPECT_TRUE(cell.contains("paper_position_mm"));
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "e/table1.md"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "e/fig7_ketchup-power-grasp.png"));
+  EXPECT_EQ(test::RunInhand("evaluate --out " + (dir / "x") + " --scenarios nope").exit_code, 2);
+}
+
+}  // namespace
+}  // namespace inhand

@@ -62,4 +62,18 @@ struct MatchCommand {
 // Runs jtf up to camera frame K and writes every matching stage as PNG plus matches.json.
 int RunMatch(const MatchCommand& cmd);
 
+struct EvaluateCommand {
+  std::string out;
+  std::string scenarios;   // comma-separated, "" = all
+  int seeds = 5;
+  std::string noise = "paper";
+  int jobs = 2;            // runs in parallel (processes)
+  bool plan = false;       // write plan.txt (one command line per run) and stop
+  bool merge = false;      // only build the tables and plots from existing runs
+  bool keep_sessions = false;
+};
+// Simulates and replays every scenario x seed, then writes table1.md, table1.json and one
+// Fig.-7-style plot per scenario.
+int RunEvaluate(const EvaluateCommand& cmd, const std::string& self_binary);
+
 }  // namespace inhand::app

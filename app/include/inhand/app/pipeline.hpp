@@ -39,6 +39,7 @@ struct EstimateRecord {
   double step_time_us = 0.0;
   int constraints = 0;
   int contacts = 0;
+  double nees = std::numeric_limits<double>::quiet_NaN();  // 6-D pose error against P, when truth exists
   double visual_ms = -1.0;  // last visual step (detection + update) when one ran at this sample
   int visual_used = 0;      // features used by it
 };
