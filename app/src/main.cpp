@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "inhand/app/commands.hpp"
+#include "inhand/app/gui.hpp"
 #include "inhand/core/error.hpp"
 
 int main(int argc, char** argv) {
@@ -70,6 +71,15 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_flag("--merge", evaluate.merge, "only build tables and plots from existing runs");
   evaluate_cmd->add_flag("--keep-sessions", evaluate.keep_sessions, "keep the simulated images");
 
+  inhand::app::GuiCommand gui;
+  auto* gui_cmd = cli.add_subcommand("gui", "Interactive session (Dear ImGui) when a display exists; --screenshot renders offscreen");
+  gui_cmd->add_option("SESSION", gui.session, "session directory")->required();
+  gui_cmd->add_option("--params", gui.params, "filter parameters (JSON)");
+  gui_cmd->add_option("--frames", gui.frames, "quit after N frames");
+  gui_cmd->add_option("--screenshot", gui.screenshot, "save the last frame as PNG");
+  gui_cmd->add_option("--time", gui.time, "start at this session time [s]");
+  gui_cmd->add_flag("--play", gui.play, "start playing");
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -82,6 +92,7 @@ int main(int argc, char** argv) {
     if (*replay_cmd) return inhand::app::RunReplay(replay);
     if (*tags_cmd) return inhand::app::RunTags(tags);
     if (*match_cmd) return inhand::app::RunMatch(match);
+    if (*gui_cmd) return inhand::app::RunGui(gui);
     if (*evaluate_cmd) {
       char self[4096];
       const ssize_t n = ::readlink("/proc/self/exe", self, sizeof(self) - 1);

@@ -309,3 +309,49 @@ TEST(Cli, EvaluatePlansRunsAndMerges) {
 
 }  // namespace
 }  // namespace inhand
+
+namespace inhand {
+namespace {
+
+// Share of pixels that differ from the top-left one: 0 for a blank picture.
+double Variety(const Image8& img, int x0, int y0, int x1, int y1) {
+  long differ = 0, total = 0;
+  const std::uint8_t* ref = img.pixel(x0, y0);
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x, ++total) {
+      const std::uint8_t* p = img.pixel(x, y);
+      differ += std::abs(p[0] - ref[0]) + std::abs(p[1] - ref[1]) + std::abs(p[2] - ref[2]) > 30;
+    }
+  return double(differ) / double(total);
+}
+
+void ExpectInterface(const Image8& img) {
+  ASSERT_EQ(img.width, 1280);
+  ASSERT_EQ(img.height, 800);
+  EXPECT_GT(Variety(img, 0, 0, 310, 800), 0.02);      // the control panel is drawn
+  EXPECT_GT(Variety(img, 320, 30, 1270, 260), 0.3);   // the camera / virtual / 3-D picture is not blank
+}
+
+TEST(Gui, HeadlessScreenshotWithoutAnyDisplay) {
+  test::TempDir dir;
+  const test::CommandResult r = test::RunInhand("gui " + ShortSession() + " --time 3.0 --frames 3 --screenshot " + (dir / "gui.png"), "env -u DISPLAY");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ExpectInterface(ReadImage(dir / "gui.png"));
+  // Without a display and without --screenshot: one clear line, non-zero exit.
+  const test::CommandResult none = test::RunInhand("gui " + ShortSession(), "env -u DISPLAY");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.output.find("no display"), std::string::npos) << none.output;
+}
+
+TEST(Gui, RealWindowUnderXvfb) {
+  if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run not installed";
+  test::TempDir dir;
+  const test::CommandResult r = test::RunInhand("gui " + ShortSession() + " --time 3.0 --play --frames 20 --screenshot " + (dir / "gui.png"),
+                                                "xvfb-run -a -s '-screen 0 1280x800x24'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("frame time median"), std::string::npos) << r.output;
+  ExpectInterface(ReadImage(dir / "gui.png"));
+}
+
+}  // namespace
+}  // namespace inhand

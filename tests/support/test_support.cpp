@@ -34,8 +34,8 @@ void TempDir::Write(const std::string& rel, const std::string& contents) const {
   std::ofstream(p, std::ios::binary) << contents;
 }
 
-CommandResult RunInhand(const std::string& args) {
-  const std::string cmd = std::string(INHAND_BINARY) + " " + args + " 2>&1";
+CommandResult RunInhand(const std::string& args, const std::string& prefix) {
+  const std::string cmd = (prefix.empty() ? "" : prefix + " ") + std::string(INHAND_BINARY) + " " + args + " 2>&1";
   CommandResult r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (pipe == nullptr) return r;

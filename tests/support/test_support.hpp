@@ -41,8 +41,10 @@ struct CommandResult {
   int exit_code = -1;
   std::string output;  // stdout and stderr together
 };
-// Runs the inhand binary with `args` (a shell-quoted string).
-CommandResult RunInhand(const std::string& args);
+// Runs the inhand binary with `args` (a shell-quoted string); `prefix` goes before the binary
+// (e.g. "env -u DISPLAY" or "xvfb-run -a").
+CommandResult RunInhand(const std::string& args, const std::string& prefix = "");
+inline std::string InhandBinary() { return INHAND_BINARY; }
 
 // The same seeded generator everywhere: failures reproduce.
 inline std::mt19937& Rng() {

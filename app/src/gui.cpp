@@ -1,0 +1,546 @@
+#include "inhand/app/gui.hpp"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/osmesa.h>
+#include <GL/gl.h>
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl2.h>
+#include <imgui_impl_opengl3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "inhand/app/pipeline.hpp"
+#include "inhand/core/error.hpp"
+#include "inhand/renderer/image_io.hpp"
+
+namespace inhand::app {
+
+namespace {
+
+// GL entry points of the context that draws the interface: the window's (libGL, through GLFW)
+// or the offscreen one (OSMesa). Never the renderer's direct calls: those belong to OSMesa.
+struct GuiGl {
+  void (*GenTextures)(GLsizei, GLuint*) = nullptr;
+  void (*BindTexture)(GLenum, GLuint) = nullptr;
+  void (*TexImage2D)(GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum, const void*) = nullptr;
+  void (*TexParameteri)(GLenum, GLenum, GLint) = nullptr;
+  void (*PixelStorei)(GLenum, GLint) = nullptr;
+  void (*Viewport)(GLint, GLint, GLsizei, GLsizei) = nullptr;
+  void (*ClearColor)(GLfloat, GLfloat, GLfloat, GLfloat) = nullptr;
+  void (*Clear)(GLbitfield) = nullptr;
+  void (*ReadPixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void*) = nullptr;
+  void (*ReadBuffer)(GLenum) = nullptr;
+  void (*Finish)() = nullptr;
+
+  template <typename Loader>
+  void Load(Loader load) {
+    const auto get = [&](auto& fn, const char* name) { fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(load(name)); };
+    get(GenTextures, "glGenTextures");
+    get(BindTexture, "glBindTexture");
+    get(TexImage2D, "glTexImage2D");
+    get(TexParameteri, "glTexParameteri");
+    get(PixelStorei, "glPixelStorei");
+    get(Viewport, "glViewport");
+    get(ClearColor, "glClearColor");
+    get(Clear, "glClear");
+    get(ReadPixels, "glReadPixels");
+    get(ReadBuffer, "glReadBuffer");
+    get(Finish, "glFinish");
+  }
+};
+
+struct Texture {
+  GLuint id = 0;
+  int width = 0, height = 0;
+  void Upload(const GuiGl& gl, const Image8& im) {
+    if (im.empty()) return;
+    if (id == 0) gl.GenTextures(1, &id);
+    gl.BindTexture(GL_TEXTURE_2D, id);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    const GLenum format = im.channels == 1 ? GL_LUMINANCE : GL_RGB;
+    gl.TexImage2D(GL_TEXTURE_2D, 0, im.channels == 1 ? GL_LUMINANCE : GL_RGB, im.width, im.height, 0, format, GL_UNSIGNED_BYTE, im.data.data());
+    width = im.width;
+    height = im.height;
+  }
+  void Show(float max_width) const {
+    if (id == 0) {
+      ImGui::TextDisabled("(no image yet)");
+      return;
+    }
+    const float w = std::min(max_width, static_cast<float>(width));
+    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(id)), ImVec2(w, w * height / width));
+  }
+};
+
+// Runs tasks on one thread of its own, waiting for each. The pipeline's OSMesa renderers live
+// there: Mesa's dispatch is per thread, so they never disturb the window's GLX context.
+class RenderThread {
+ public:
+  RenderThread() : thread_([this] { Loop(); }) {}
+  ~RenderThread() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  void Run(const std::function<void()>& task) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    task_ = task;
+    done_ = false;
+    error_ = nullptr;
+    cv_.notify_all();
+    cv_.wait(lock, [this] { return done_; });
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void Loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      cv_.wait(lock, [this] { return stop_ || task_; });
+      if (stop_) return;
+      std::function<void()> task = std::move(task_);
+      task_ = nullptr;
+      lock.unlock();
+      std::exception_ptr error;
+      try {
+        task();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      lock.lock();
+      error_ = error;
+      done_ = true;
+      cv_.notify_all();
+    }
+  }
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::function<void()> task_;
+  bool done_ = false, stop_ = false;
+  std::exception_ptr error_;
+  std::thread thread_;
+};
+
+enum class ActionKind { kTogglePlay, kStepSample, kStepFrame, kSeek, kRecompute, kSaveParams };
+struct Action {
+  ActionKind kind;
+  int value = 0;
+};
+
+// Everything the interface shows or edits; actions are applied between frames.
+struct GuiState {
+  bool playing = false;
+  float speed = 1.0f;
+  int seek_sample = 0;
+  OverlayLayers layers;
+  FilterParams params;
+  char params_path[512] = "params.json";
+  std::deque<Action> actions;
+  std::string status;
+  // Histories over samples, per modality set.
+  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints, features;
+  bool pictures_dirty = true;
+};
+
+class Runner {
+ public:
+  Runner(Session& session, GuiState& state) : session_(session), state_(state) { Restart(); }
+  void Restart() {
+    pipeline_ = std::make_unique<Pipeline>(session_, state_.params, DefaultModalities(session_));
+    composer_ = std::make_unique<FrameComposer>(*pipeline_);
+    next_ = 0;
+    last_frame_ = -1;
+    const std::size_t sets = pipeline_->sets().size();
+    for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features})
+      h->assign(sets, {});
+    StepTo(0);
+  }
+  // Deterministic: going back recomputes from the start, so a seek never drifts.
+  void StepTo(int k) {
+    k = std::clamp(k, 0, session_.num_samples() - 1);
+    if (k < next_ - 1) Restart();
+    while (next_ <= k) {
+      pipeline_->Step(next_);
+      for (std::size_t i = 0; i < pipeline_->sets().size(); ++i) {
+        const EstimateRecord& r = pipeline_->last(i);
+        state_.position_error[i].push_back(static_cast<float>(r.position_error * 1000));
+        state_.orientation_error[i].push_back(static_cast<float>(r.orientation_error * 180 / M_PI));
+        state_.sigma_position[i].push_back(static_cast<float>(r.sigma_position.norm() * 1000));
+        state_.constraints[i].push_back(static_cast<float>(r.constraints));
+        state_.features[i].push_back(static_cast<float>(r.visual_used));
+      }
+      if (pipeline_->last_frame() >= 0) last_frame_ = pipeline_->last_frame(), state_.pictures_dirty = true;
+      ++next_;
+    }
+  }
+  void StepFrame() {
+    const int target = last_frame_ + 1;
+    while (next_ < session_.num_samples() && last_frame_ < target) StepTo(next_);
+  }
+  Image8 Picture() {
+    if (last_frame_ < 0 || !session_.info().camera) return Image8();
+    return composer_->Compose(last_frame_, session_.t(std::max(0, next_ - 1)), state_.layers);
+  }
+  int sample() const { return next_ - 1; }
+  int frame() const { return last_frame_; }
+  const Pipeline& pipeline() const { return *pipeline_; }
+  Session& session() { return session_; }
+
+ private:
+  Session& session_;
+  GuiState& state_;
+  std::unique_ptr<Pipeline> pipeline_;
+  std::unique_ptr<FrameComposer> composer_;
+  int next_ = 0;
+  int last_frame_ = -1;
+};
+
+Image8 Difference(const Image8& a, const Image8& b) {
+  if (a.empty() || b.empty() || a.width != b.width || a.height != b.height) return Image8();
+  Image8 d(a.width, a.height, 3);
+  for (std::size_t i = 0; i < d.data.size(); ++i) {
+    const int ca = a.channels == 3 ? a.data[i] : a.data[i / 3], cb = b.channels == 3 ? b.data[i] : b.data[i / 3];
+    d.data[i] = static_cast<std::uint8_t>(std::min(255, 2 * std::abs(ca - cb)));
+  }
+  return d;
+}
+
+struct Textures {
+  Texture picture, camera_edges, virtual_edges, difference;
+};
+
+void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiState& state, Textures& tex) {
+  if (!state.pictures_dirty) return;
+  state.pictures_dirty = false;
+  Image8 picture;
+  render.Run([&] { picture = runner.Picture(); });
+  tex.picture.Upload(gl, picture);
+  const Pipeline::FeatureStep& fs = runner.pipeline().last_feature_step();
+  tex.camera_edges.Upload(gl, fs.match.debug.real_edges);
+  tex.virtual_edges.Upload(gl, fs.match.debug.virtual_edges);
+  tex.difference.Upload(gl, Difference(runner.pipeline().last_image(), fs.virtual_view.colour));
+}
+
+void ApplyActions(Runner& runner, GuiState& state) {
+  while (!state.actions.empty()) {
+    const Action a = state.actions.front();
+    state.actions.pop_front();
+    switch (a.kind) {
+      case ActionKind::kTogglePlay: state.playing = !state.playing; break;
+      case ActionKind::kStepSample: runner.StepTo(runner.sample() + 1), state.pictures_dirty = true; break;
+      case ActionKind::kStepFrame: runner.StepFrame(); break;
+      case ActionKind::kSeek: runner.StepTo(a.value), state.pictures_dirty = true; break;
+      case ActionKind::kRecompute: {
+        try {
+          state.params.Validate("GUI parameters");
+          const int at = runner.sample();
+          runner.Restart();
+          runner.StepTo(at);
+          state.status = "recomputed with the new parameters";
+        } catch (const InputError& e) {
+          state.status = e.what();
+        }
+        break;
+      }
+      case ActionKind::kSaveParams: {
+        std::ofstream out(state.params_path);
+        out << FilterParamsToJson(state.params) << "\n";
+        state.status = out ? std::string("saved ") + state.params_path + " (replay --params accepts it)" : "cannot write " + std::string(state.params_path);
+        break;
+      }
+    }
+  }
+  if (state.playing) {
+    // Real time at `speed`, assuming 30 interface frames per second.
+    const Session& s = runner.session();
+    const double rate = s.num_samples() > 1 ? (s.num_samples() - 1) / (s.t(s.num_samples() - 1) - s.t(0)) : 100.0;
+    const int step = std::max(1, static_cast<int>(std::lround(rate * state.speed / 30.0)));
+    runner.StepTo(runner.sample() + step);  // marks the pictures dirty when a camera frame arrives
+    if (runner.sample() >= s.num_samples() - 1) state.playing = false;
+  }
+  state.seek_sample = runner.sample();
+}
+
+void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
+  const Session& s = runner.session();
+  const Pipeline& p = runner.pipeline();
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImVec2(310, static_cast<float>(height)));
+  ImGui::Begin("inhand", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse);
+  ImGui::TextWrapped("%s", s.info().name.c_str());
+  ImGui::Text("t = %.3f s   sample %d / %d   frame %d", s.t(std::max(0, runner.sample())), runner.sample(), s.num_samples() - 1, runner.frame());
+  if (ImGui::Button(state.playing ? "Pause" : "Play")) state.actions.push_back({ActionKind::kTogglePlay});
+  ImGui::SameLine();
+  if (ImGui::Button("+1 sample")) state.actions.push_back({ActionKind::kStepSample});
+  ImGui::SameLine();
+  if (ImGui::Button("+1 frame")) state.actions.push_back({ActionKind::kStepFrame});
+  ImGui::SliderFloat("speed", &state.speed, 0.1f, 4.0f, "%.1fx");
+  int seek = state.seek_sample;
+  if (ImGui::SliderInt("sample", &seek, 0, s.num_samples() - 1)) state.actions.push_back({ActionKind::kSeek, seek});
+  ImGui::Separator();
+  ImGui::Text("Overlay layers");
+  bool changed = false;
+  changed |= ImGui::Checkbox("silhouettes", &state.layers.silhouette);
+  changed |= ImGui::Checkbox("outlines", &state.layers.outline);
+  changed |= ImGui::Checkbox("contacts", &state.layers.contacts);
+  changed |= ImGui::Checkbox("forces", &state.layers.forces);
+  changed |= ImGui::Checkbox("friction cones", &state.layers.cones);
+  changed |= ImGui::Checkbox("features", &state.layers.features);
+  changed |= ImGui::Checkbox("axes", &state.layers.axes);
+  changed |= ImGui::Checkbox("3-sigma ellipse", &state.layers.uncertainty);
+  changed |= ImGui::Checkbox("HUD", &state.layers.hud);
+  if (changed) state.pictures_dirty = true;
+  ImGui::Separator();
+  ImGui::Text("Filter parameters");
+  float sigma_mm = static_cast<float>(state.params.contact_sigma * 1000);
+  if (ImGui::SliderFloat("contact sigma [mm]", &sigma_mm, 0.1f, 5.0f)) state.params.contact_sigma = sigma_mm / 1000.0;
+  float force = static_cast<float>(state.params.force_min);
+  if (ImGui::SliderFloat("force min [N]", &force, 0.0f, 10.0f)) state.params.force_min = force;
+  float cone = static_cast<float>(state.params.friction_cone_deg);
+  if (ImGui::SliderFloat("friction cone [deg]", &cone, 5.0f, 90.0f)) state.params.friction_cone_deg = cone;
+  float pixel = static_cast<float>(state.params.pixel_sigma);
+  if (ImGui::SliderFloat("pixel sigma [px]", &pixel, 0.5f, 10.0f)) state.params.pixel_sigma = pixel;
+  ImGui::SliderInt("contact iterations", &state.params.contact_iterations, 1, 5);
+  ImGui::Checkbox("normal-only contacts", &state.params.contact_normal_only);
+  if (ImGui::Button("Recompute from the start")) state.actions.push_back({ActionKind::kRecompute});
+  ImGui::InputText("file", state.params_path, sizeof(state.params_path));
+  if (ImGui::Button("Save parameters")) state.actions.push_back({ActionKind::kSaveParams});
+  if (!state.status.empty()) ImGui::TextWrapped("%s", state.status.c_str());
+  ImGui::End();
+
+  ImGui::SetNextWindowPos(ImVec2(310, 0));
+  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(width - 310), static_cast<float>(height)));
+  ImGui::Begin("views", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
+  const float avail = ImGui::GetContentRegionAvail().x;
+  ImGui::Text("camera + estimates (truth dashed) | virtual view | 3-D view");
+  tex.picture.Show(avail);
+  if (ImGui::BeginTabBar("tabs")) {
+    if (ImGui::BeginTabItem("Errors and uncertainty")) {
+      for (std::size_t i = 0; i < p.sets().size(); ++i) {
+        const Rgb& c = p.sets()[i].colour;
+        ImGui::PushStyleColor(ImGuiCol_PlotLines, ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f));
+        const auto& pe = state.position_error[i];
+        const auto& oe = state.orientation_error[i];
+        const auto& sp = state.sigma_position[i];
+        char label[64];
+        std::snprintf(label, sizeof(label), "%s pos err [mm] %.1f", p.sets()[i].name.c_str(), pe.empty() ? 0.f : pe.back());
+        ImGui::PlotLines(label, pe.data(), static_cast<int>(pe.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.30f, 48));
+        ImGui::SameLine();
+        std::snprintf(label, sizeof(label), "ori err [deg] %.1f##%zu", oe.empty() ? 0.f : oe.back(), i);
+        ImGui::PlotLines(label, oe.data(), static_cast<int>(oe.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.30f, 48));
+        ImGui::SameLine();
+        std::snprintf(label, sizeof(label), "sigma [mm] %.1f##%zu", sp.empty() ? 0.f : sp.back(), i);
+        ImGui::PlotLines(label, sp.data(), static_cast<int>(sp.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.22f, 48));
+        ImGui::PopStyleColor();
+      }
+      ImGui::EndTabItem();
+    }
+    if (ImGui::BeginTabItem("Biases and counts")) {
+      for (std::size_t i = 0; i < p.sets().size(); ++i) {
+        const auto& b = p.last(i).biases;
+        std::vector<float> deg(static_cast<std::size_t>(b.size()));
+        for (long j = 0; j < b.size(); ++j) deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
+        char label[64];
+        std::snprintf(label, sizeof(label), "%s joint biases [deg]", p.sets()[i].name.c_str());
+        ImGui::PlotHistogram(label, deg.data(), static_cast<int>(deg.size()), 0, nullptr, -6.0f, 6.0f, ImVec2(avail * 0.45f, 44));
+        ImGui::SameLine();
+        std::snprintf(label, sizeof(label), "constraints / features##%zu", i);
+        ImGui::PlotLines(label, state.constraints[i].data(), static_cast<int>(state.constraints[i].size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.3f, 44));
+      }
+      ImGui::EndTabItem();
+    }
+    if (ImGui::BeginTabItem("Feature matching")) {
+      const float w = (avail - 16) / 3;
+      ImGui::Text("camera edges");
+      ImGui::SameLine(w + 8);
+      ImGui::Text("virtual edges");
+      ImGui::SameLine(2 * w + 16);
+      ImGui::Text("|camera - virtual|");
+      tex.camera_edges.Show(w);
+      ImGui::SameLine();
+      tex.virtual_edges.Show(w);
+      ImGui::SameLine();
+      tex.difference.Show(w);
+      const MatchResult& m = p.last_feature_step().match;
+      ImGui::Text("%zu virtual corners, %zu Hough matches, %d RANSAC inliers (inhand match writes every stage)",
+                  m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());
+      ImGui::EndTabItem();
+    }
+    ImGui::EndTabBar();
+  }
+  ImGui::End();
+}
+
+void SaveScreenshot(const GuiGl& gl, int width, int height, const std::string& path) {
+  Image8 img(width, height, 3);
+  std::vector<std::uint8_t> rows(static_cast<std::size_t>(width) * height * 3);
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.ReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+  for (int y = 0; y < height; ++y)
+    std::copy_n(&rows[static_cast<std::size_t>(height - 1 - y) * width * 3], width * 3, img.pixel(0, y));
+  WriteImage(path, img);
+}
+
+int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, GuiState& state) {
+  OSMesaContext ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
+  if (!ctx) throw std::runtime_error("gui: cannot create an offscreen OpenGL context");
+  std::vector<std::uint8_t> buffer(static_cast<std::size_t>(cmd.width) * cmd.height * 4);
+  OSMesaMakeCurrent(ctx, buffer.data(), GL_UNSIGNED_BYTE, cmd.width, cmd.height);
+  GuiGl gl;
+  gl.Load([](const char* name) { return reinterpret_cast<void*>(OSMesaGetProcAddress(name)); });
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  ImGui::StyleColorsDark();
+  ImGui_ImplOpenGL2_Init();
+  Textures tex;
+  const int frames = cmd.frames > 0 ? cmd.frames : 1;
+  for (int f = 0; f < frames; ++f) {
+    render.Run([&] { ApplyActions(runner, state); });
+    UpdateTextures(gl, render, runner, state, tex);
+    ImGuiIO& io = ImGui::GetIO();
+    io.DisplaySize = ImVec2(static_cast<float>(cmd.width), static_cast<float>(cmd.height));
+    io.DeltaTime = 1.0f / 30.0f;
+    ImGui_ImplOpenGL2_NewFrame();
+    ImGui::NewFrame();
+    DrawUi(runner, state, tex, cmd.width, cmd.height);
+    ImGui::Render();
+    gl.Viewport(0, 0, cmd.width, cmd.height);
+    gl.ClearColor(0.1f, 0.1f, 0.12f, 1.0f);
+    gl.Clear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL2_RenderDrawData(ImGui::GetDrawData());
+    gl.Finish();
+  }
+  // OSMesa's buffer holds the last frame, bottom row first.
+  Image8 img(cmd.width, cmd.height, 3);
+  for (int y = 0; y < cmd.height; ++y)
+    for (int x = 0; x < cmd.width; ++x)
+      for (int c = 0; c < 3; ++c)
+        img.pixel(x, y)[c] = buffer[(static_cast<std::size_t>(cmd.height - 1 - y) * cmd.width + x) * 4 + static_cast<std::size_t>(c)];
+  WriteImage(cmd.screenshot, img);
+  ImGui_ImplOpenGL2_Shutdown();
+  ImGui::DestroyContext();
+  OSMesaDestroyContext(ctx);
+  std::cout << "offscreen interface (no display): " << frames << " frames, screenshot " << cmd.screenshot << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int RunGui(const GuiCommand& cmd) {
+  if (cmd.width < 640 || cmd.height < 480) throw InputError("gui: the window must be at least 640x480");
+  Session session = Session::Load(cmd.session);
+  GuiState state;
+  if (!cmd.params.empty()) {
+    std::ifstream in(cmd.params);
+    if (!in) throw InputError(cmd.params + ": cannot open the parameter file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    state.params = FilterParamsFromJson(ss.str(), cmd.params);
+  }
+  if (cmd.time >= 0.0) {
+    int k = 0;
+    while (k + 1 < session.num_samples() && session.t(k + 1) <= cmd.time) ++k;
+    state.actions.push_back({ActionKind::kSeek, k});
+  }
+  state.playing = cmd.play;
+  const char* display = std::getenv("DISPLAY");
+  const bool have_display = display && *display && glfwInit();
+  if (!have_display) {
+    if (cmd.screenshot.empty()) {
+      std::cerr << "inhand: error: no display for the interactive session (set DISPLAY, or use --screenshot FILE to render it offscreen)\n";
+      return 2;
+    }
+    RenderThread render;
+    std::unique_ptr<Runner> runner;
+    render.Run([&] { runner = std::make_unique<Runner>(session, state); });
+    const int code = RunHeadless(cmd, render, *runner, state);
+    render.Run([&] { runner.reset(); });
+    return code;
+  }
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  GLFWwindow* window = glfwCreateWindow(cmd.width, cmd.height, ("inhand: " + session.info().name).c_str(), nullptr, nullptr);
+  if (!window) {
+    glfwTerminate();
+    throw std::runtime_error("gui: cannot open an OpenGL 3.3 window");
+  }
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(1);
+  GuiGl gl;
+  gl.Load([](const char* name) { return reinterpret_cast<void*>(glfwGetProcAddress(name)); });
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window, true);
+  ImGui_ImplOpenGL3_Init("#version 330");
+  RenderThread render;
+  std::unique_ptr<Runner> runner_owner;
+  render.Run([&] { runner_owner = std::make_unique<Runner>(session, state); });
+  Runner& runner = *runner_owner;
+  Textures tex;
+  int frames = 0;
+  std::vector<double> frame_ms;
+  auto last = std::chrono::steady_clock::now();
+  while (!glfwWindowShouldClose(window) && (cmd.frames < 0 || frames < cmd.frames)) {
+    const auto now = std::chrono::steady_clock::now();
+    if (frames > 0) frame_ms.push_back(std::chrono::duration<double, std::milli>(now - last).count());
+    last = now;
+    glfwPollEvents();
+    render.Run([&] { ApplyActions(runner, state); });
+    UpdateTextures(gl, render, runner, state, tex);
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    int w = 0, h = 0;
+    glfwGetFramebufferSize(window, &w, &h);
+    DrawUi(runner, state, tex, w, h);
+    ImGui::Render();
+    gl.Viewport(0, 0, w, h);
+    gl.ClearColor(0.1f, 0.1f, 0.12f, 1.0f);
+    gl.Clear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    ++frames;
+    if (!cmd.screenshot.empty() && cmd.frames > 0 && frames == cmd.frames) {
+      gl.ReadBuffer(GL_BACK);
+      SaveScreenshot(gl, w, h, cmd.screenshot);
+    }
+    glfwSwapBuffers(window);
+  }
+  render.Run([&] { runner_owner.reset(); });
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  glfwDestroyWindow(window);
+  glfwTerminate();
+  std::sort(frame_ms.begin(), frame_ms.end());
+  const double median = frame_ms.empty() ? 0.0 : frame_ms[frame_ms.size() / 2];
+  const double p95 = frame_ms.empty() ? 0.0 : frame_ms[std::min(frame_ms.size() - 1, frame_ms.size() * 95 / 100)];
+  std::cout << "window: " << frames << " frames, frame time median " << median << " ms, p95 " << p95 << " ms";
+  if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;
+  std::cout << "\n";
+  return 0;
+}
+
+}  // namespace inhand::app
