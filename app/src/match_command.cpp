@@ -12,6 +12,7 @@
 #include "inhand/core/error.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/renderer/image_io.hpp"
+#include "staged_output.hpp"
 
 namespace fs = std::filesystem;
 
@@ -106,17 +107,13 @@ int RunMatch(const MatchCommand& cmd) {
     cv::circle(matches, P(m.real_px), 3, col, 1, cv::LINE_AA);
   }
 
-  // Staged output folder, renamed into place when complete.
-  const fs::path final_dir = fs::absolute(cmd.out).lexically_normal();
-  const fs::path tmp = final_dir.parent_path() / ("." + final_dir.filename().string() + ".tmp-" + std::to_string(::getpid()));
-  fs::remove_all(tmp);
-  fs::create_directories(tmp);
-  try {
+  StagedOutput out(cmd.out);
+  {
     const std::vector<std::pair<std::string, cv::Mat*>> images = {
         {"camera.png", &camera}, {"virtual.png", &virt}, {"edges_camera.png", &real_edges}, {"edges_virtual.png", &virtual_edges},
         {"corners_camera.png", &corners_real}, {"corners_virtual.png", &corners_virtual}, {"pieces.png", &pieces},
         {"hough_votes.png", &votes}, {"matches.png", &matches}};
-    for (const auto& [name, m] : images) WriteImage((tmp / name).string(), ToImage(*m));
+    for (const auto& [name, m] : images) WriteImage((out / name).string(), ToImage(*m));
     // Everything in one picture: 2 rows x 3 columns at half size.
     std::vector<std::pair<std::string, cv::Mat>> grid = {
         {"1. camera edges (Canny)", real_edges}, {"1. virtual edges (Canny)", virtual_edges}, {"2. Harris corners (virtual: kept green)", corners_virtual},
@@ -136,7 +133,7 @@ int RunMatch(const MatchCommand& cmd) {
     }
     cv::Mat all;
     cv::vconcat(rows, all);
-    WriteImage((tmp / "stages.png").string(), ToImage(all));
+    WriteImage((out / "stages.png").string(), ToImage(all));
 
     jsonf::Json list = jsonf::Json::array();
     for (const FeatureMatch& m : r.matches) {
@@ -155,12 +152,8 @@ int RunMatch(const MatchCommand& cmd) {
                              {"pieces_rejected", d.piece_rejected.size()}, {"votes_rejected", d.vote_rejected.size()},
                              {"matches", r.matches.size()}, {"inliers", r.num_inliers()}, {"features_used", fs.used_match.size()},
                              {"list", list}};
-    std::ofstream(tmp / "matches.json") << doc.dump(2) << "\n";
-    fs::remove_all(final_dir);
-    fs::rename(tmp, final_dir);
-  } catch (...) {
-    fs::remove_all(tmp);
-    throw;
+    std::ofstream(out / "matches.json") << doc.dump(2) << "\n";
+    out.Commit();
   }
   double before = 0, after = 0;
   for (std::size_t u = 0; u < fs.residual_before.size(); ++u) before += fs.residual_before[u], after += fs.residual_after[u];

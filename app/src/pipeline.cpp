@@ -129,6 +129,23 @@ void Pipeline::Step(int k) {
   }
 }
 
+namespace {
+
+// The scene as a filter believes it (hand at its biased joints, object at its estimate), seen
+// from the camera: the virtual image of the feature step and of the replay's middle view.
+Scene BelievedScene(const Filter& f, const Transform& T_PC, const Intrinsics& K, const HandMeshes& hand,
+                    const std::vector<int>& object, const Vec3& background) {
+  Scene scene;
+  scene.K = K;
+  scene.T_PC = T_PC;
+  scene.background = background;
+  AddHand(scene, hand, f.kinematics().link_poses());
+  AddObject(scene, object, f.T_PO());
+  return scene;
+}
+
+}  // namespace
+
 void Pipeline::FeatureUpdate(std::size_t set, int frame) {
   Filter& f = *filters_[set];
   const Intrinsics& K = *session_.info().camera;
@@ -137,13 +154,7 @@ void Pipeline::FeatureUpdate(std::size_t set, int frame) {
   // The virtual image: the scene as this filter believes it, from the camera.
   FeatureStep& fs = feature_step_;
   fs.frame = frame;
-  Scene scene;
-  scene.K = K;
-  scene.T_PC = cf.T_PC;
-  scene.background = Vec3(0.5, 0.5, 0.5);
-  AddHand(scene, hand_meshes_, f.kinematics().link_poses());
-  AddObject(scene, object_meshes_, f.T_PO());
-  renderer_->Render(scene, fs.virtual_view, true);
+  renderer_->Render(BelievedScene(f, cf.T_PC, K, hand_meshes_, object_meshes_, Vec3(0.5, 0.5, 0.5)), fs.virtual_view, true);
   std::vector<std::uint8_t> mask(fs.virtual_view.label.size());
   for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = fs.virtual_view.label[i] == kObjectLabel;
   fs.match = MatchFeatures(image_, fs.virtual_view.colour, &mask, feature_params_);
@@ -227,14 +238,8 @@ Image8 FrameComposer::Compose(int camera_frame, double t, const OverlayLayers& l
   // The virtual view: the scene as the last set believes it, from the camera.
   const std::size_t last = p_.sets().size() - 1;
   const Filter& f = p_.filter(last);
-  Scene virtual_scene;
-  virtual_scene.K = K;
-  virtual_scene.T_PC = frame.T_PC;
-  virtual_scene.background = Vec3(0.12, 0.12, 0.14);
-  AddHand(virtual_scene, hand_meshes_, f.kinematics().link_poses());
-  AddObject(virtual_scene, object_meshes_, f.T_PO());
   RenderOutput virtual_out;
-  renderer_.Render(virtual_scene, virtual_out, false);
+  renderer_.Render(BelievedScene(f, frame.T_PC, K, hand_meshes_, object_meshes_, Vec3(0.12, 0.12, 0.14)), virtual_out, false);
 
   // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
   Scene orbit;

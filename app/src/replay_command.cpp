@@ -16,6 +16,7 @@
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/video.hpp"
+#include "staged_output.hpp"
 
 namespace fs = std::filesystem;
 
@@ -24,33 +25,6 @@ namespace inhand::app {
 namespace {
 
 using jsonf::Json;
-
-// A temporary output folder beside the target, renamed into place on success only.
-class StagedOutput {
- public:
-  explicit StagedOutput(const std::string& out) : final_(fs::absolute(out).lexically_normal()) {
-    if (final_.filename().empty()) final_ = final_.parent_path();
-    tmp_ = final_.parent_path() / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
-    fs::remove_all(tmp_);
-    std::error_code ec;
-    fs::create_directories(tmp_, ec);
-    if (ec) throw InputError(out + ": cannot create the output folder (" + ec.message() + ")");
-  }
-  ~StagedOutput() {
-    std::error_code ec;
-    if (!committed_) fs::remove_all(tmp_, ec);
-  }
-  fs::path operator/(const std::string& rel) const { return tmp_ / rel; }
-  void Commit() {
-    fs::remove_all(final_);
-    fs::rename(tmp_, final_);
-    committed_ = true;
-  }
-
- private:
-  fs::path final_, tmp_;
-  bool committed_ = false;
-};
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
