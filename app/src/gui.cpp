@@ -23,6 +23,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "inhand/app/match_pictures.hpp"
 #include "inhand/app/pipeline.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/renderer/image_io.hpp"
@@ -151,13 +152,16 @@ struct GuiState {
   bool playing = false;
   float speed = 1.0f;
   int seek_sample = 0;
+  float typed_time = 0.0f;
+  bool editing_time = false;  // while typing, the field does not follow the replay
+  FrameComposer::Orbit orbit;
   OverlayLayers layers;
   FilterParams params;
   char params_path[512] = "params.json";
   std::deque<Action> actions;
   std::string status;
   // Histories over samples, per modality set.
-  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints, features;
+  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints, features, gated;
   bool pictures_dirty = true;
 };
 
@@ -170,7 +174,7 @@ class Runner {
     next_ = 0;
     last_frame_ = -1;
     const std::size_t sets = pipeline_->sets().size();
-    for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features})
+    for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features, &state_.gated})
       h->assign(sets, {});
     StepTo(0);
   }
@@ -187,6 +191,7 @@ class Runner {
         state_.sigma_position[i].push_back(static_cast<float>(r.sigma_position.norm() * 1000));
         state_.constraints[i].push_back(static_cast<float>(r.constraints));
         state_.features[i].push_back(static_cast<float>(r.visual_used));
+        state_.gated[i].push_back(static_cast<float>(r.gated));
       }
       if (pipeline_->last_frame() >= 0) last_frame_ = pipeline_->last_frame(), state_.pictures_dirty = true;
       ++next_;
@@ -198,7 +203,13 @@ class Runner {
   }
   Image8 Picture() {
     if (last_frame_ < 0 || !session_.info().camera) return Image8();
+    composer_->orbit = state_.orbit;
     return composer_->Compose(last_frame_, session_.t(std::max(0, next_ - 1)), state_.layers);
+  }
+  int SampleAt(double t) const {
+    int k = 0;
+    while (k + 1 < session_.num_samples() && session_.t(k + 1) <= t) ++k;
+    return k;
   }
   int sample() const { return next_ - 1; }
   int frame() const { return last_frame_; }
@@ -214,18 +225,8 @@ class Runner {
   int last_frame_ = -1;
 };
 
-Image8 Difference(const Image8& a, const Image8& b) {
-  if (a.empty() || b.empty() || a.width != b.width || a.height != b.height) return Image8();
-  Image8 d(a.width, a.height, 3);
-  for (std::size_t i = 0; i < d.data.size(); ++i) {
-    const int ca = a.channels == 3 ? a.data[i] : a.data[i / 3], cb = b.channels == 3 ? b.data[i] : b.data[i / 3];
-    d.data[i] = static_cast<std::uint8_t>(std::min(255, 2 * std::abs(ca - cb)));
-  }
-  return d;
-}
-
 struct Textures {
-  Texture picture, camera_edges, virtual_edges, difference;
+  Texture picture, camera_edges, virtual_edges, difference, corners, pieces, votes, matches;
 };
 
 void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiState& state, Textures& tex) {
@@ -234,10 +235,14 @@ void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiSt
   Image8 picture;
   render.Run([&] { picture = runner.Picture(); });
   tex.picture.Upload(gl, picture);
-  const Pipeline::FeatureStep& fs = runner.pipeline().last_feature_step();
-  tex.camera_edges.Upload(gl, fs.match.debug.real_edges);
-  tex.virtual_edges.Upload(gl, fs.match.debug.virtual_edges);
-  tex.difference.Upload(gl, Difference(runner.pipeline().last_image(), fs.virtual_view.colour));
+  const MatchPictures m = DrawMatchPictures(runner.pipeline().last_image(), runner.pipeline().last_feature_step());
+  tex.camera_edges.Upload(gl, m.edges_camera);
+  tex.virtual_edges.Upload(gl, m.edges_virtual);
+  tex.difference.Upload(gl, m.difference);
+  tex.corners.Upload(gl, m.corners_virtual);
+  tex.pieces.Upload(gl, m.pieces);
+  tex.votes.Upload(gl, m.votes);
+  tex.matches.Upload(gl, m.matches);
 }
 
 void ApplyActions(Runner& runner, GuiState& state) {
@@ -280,14 +285,17 @@ void ApplyActions(Runner& runner, GuiState& state) {
   state.seek_sample = runner.sample();
 }
 
+constexpr float kPanelWidth = 330.0f;
+
 void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
   const Session& s = runner.session();
   const Pipeline& p = runner.pipeline();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
-  ImGui::SetNextWindowSize(ImVec2(310, static_cast<float>(height)));
+  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(height)));
   ImGui::Begin("inhand", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse);
+  ImGui::PushItemWidth(kPanelWidth * 0.5f);  // leaves room for the longest label
   ImGui::TextWrapped("%s", s.info().name.c_str());
-  ImGui::Text("t = %.3f s   sample %d / %d   frame %d", s.t(std::max(0, runner.sample())), runner.sample(), s.num_samples() - 1, runner.frame());
+  ImGui::Text("t = %.3f s  sample %d/%d  frame %d", s.t(std::max(0, runner.sample())), runner.sample(), s.num_samples() - 1, runner.frame());
   if (ImGui::Button(state.playing ? "Pause" : "Play")) state.actions.push_back({ActionKind::kTogglePlay});
   ImGui::SameLine();
   if (ImGui::Button("+1 sample")) state.actions.push_back({ActionKind::kStepSample});
@@ -296,6 +304,12 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::SliderFloat("speed", &state.speed, 0.1f, 4.0f, "%.1fx");
   int seek = state.seek_sample;
   if (ImGui::SliderInt("sample", &seek, 0, s.num_samples() - 1)) state.actions.push_back({ActionKind::kSeek, seek});
+  if (!state.editing_time) state.typed_time = static_cast<float>(s.t(std::max(0, runner.sample())));
+  ImGui::InputFloat("time [s]", &state.typed_time, 0.1f, 1.0f, "%.3f");
+  state.editing_time = ImGui::IsItemActive();
+  ImGui::SameLine();
+  if (ImGui::Button("Go")) state.actions.push_back({ActionKind::kSeek, runner.SampleAt(state.typed_time)});
+  ImGui::Text("3-D view: drag it to orbit, wheel to zoom");
   ImGui::Separator();
   ImGui::Text("Overlay layers");
   bool changed = false;
@@ -325,14 +339,29 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::InputText("file", state.params_path, sizeof(state.params_path));
   if (ImGui::Button("Save parameters")) state.actions.push_back({ActionKind::kSaveParams});
   if (!state.status.empty()) ImGui::TextWrapped("%s", state.status.c_str());
+  ImGui::PopItemWidth();
   ImGui::End();
 
-  ImGui::SetNextWindowPos(ImVec2(310, 0));
-  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(width - 310), static_cast<float>(height)));
+  ImGui::SetNextWindowPos(ImVec2(kPanelWidth, 0));
+  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(width) - kPanelWidth, static_cast<float>(height)));
   ImGui::Begin("views", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
   const float avail = ImGui::GetContentRegionAvail().x;
   ImGui::Text("camera + estimates (truth dashed) | virtual view | 3-D view");
   tex.picture.Show(avail);
+  if (ImGui::IsItemHovered()) {
+    const ImGuiIO& io = ImGui::GetIO();
+    const ImVec2 min = ImGui::GetItemRectMin(), max = ImGui::GetItemRectMax();
+    const bool over_3d = io.MousePos.x > min.x + 2.0f * (max.x - min.x) / 3.0f;
+    if (over_3d && ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
+      state.orbit.azimuth -= 0.01 * io.MouseDelta.x;
+      state.orbit.elevation = std::clamp(state.orbit.elevation + 0.01 * io.MouseDelta.y, -1.5, 1.5);
+      state.pictures_dirty = true;
+    }
+    if (over_3d && io.MouseWheel != 0.0f) {
+      state.orbit.distance = std::clamp(state.orbit.distance * (1.0 - 0.1 * io.MouseWheel), 0.1, 2.0);
+      state.pictures_dirty = true;
+    }
+  }
   if (ImGui::BeginTabBar("tabs")) {
     if (ImGui::BeginTabItem("Errors and uncertainty")) {
       for (std::size_t i = 0; i < p.sets().size(); ++i) {
@@ -341,15 +370,20 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         const auto& pe = state.position_error[i];
         const auto& oe = state.orientation_error[i];
         const auto& sp = state.sigma_position[i];
-        char label[64];
-        std::snprintf(label, sizeof(label), "%s pos err [mm] %.1f", p.sets()[i].name.c_str(), pe.empty() ? 0.f : pe.back());
-        ImGui::PlotLines(label, pe.data(), static_cast<int>(pe.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.30f, 48));
+        // Labels go inside the plots (overlay text) so three columns fit any window width.
+        const float w = (avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
+        char id[48], text[96];
+        std::snprintf(id, sizeof(id), "##pos%zu", i);
+        std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(), pe.empty() ? 0.f : pe.back());
+        ImGui::PlotLines(id, pe.data(), static_cast<int>(pe.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
         ImGui::SameLine();
-        std::snprintf(label, sizeof(label), "ori err [deg] %.1f##%zu", oe.empty() ? 0.f : oe.back(), i);
-        ImGui::PlotLines(label, oe.data(), static_cast<int>(oe.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.30f, 48));
+        std::snprintf(id, sizeof(id), "##ori%zu", i);
+        std::snprintf(text, sizeof(text), "orientation error %.1f deg", oe.empty() ? 0.f : oe.back());
+        ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
         ImGui::SameLine();
-        std::snprintf(label, sizeof(label), "sigma [mm] %.1f##%zu", sp.empty() ? 0.f : sp.back(), i);
-        ImGui::PlotLines(label, sp.data(), static_cast<int>(sp.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.22f, 48));
+        std::snprintf(id, sizeof(id), "##sig%zu", i);
+        std::snprintf(text, sizeof(text), "position sigma %.1f mm", sp.empty() ? 0.f : sp.back());
+        ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
         ImGui::PopStyleColor();
       }
       ImGui::EndTabItem();
@@ -359,12 +393,19 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         const auto& b = p.last(i).biases;
         std::vector<float> deg(static_cast<std::size_t>(b.size()));
         for (long j = 0; j < b.size(); ++j) deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
-        char label[64];
-        std::snprintf(label, sizeof(label), "%s joint biases [deg]", p.sets()[i].name.c_str());
-        ImGui::PlotHistogram(label, deg.data(), static_cast<int>(deg.size()), 0, nullptr, -6.0f, 6.0f, ImVec2(avail * 0.45f, 44));
+        const float w = (avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
+        char id[48], text[96];
+        std::snprintf(id, sizeof(id), "##bias%zu", i);
+        std::snprintf(text, sizeof(text), "%s joint biases [deg], range +-6", p.sets()[i].name.c_str());
+        ImGui::PlotHistogram(id, deg.data(), static_cast<int>(deg.size()), 0, text, -6.0f, 6.0f, ImVec2(w, 44));
         ImGui::SameLine();
-        std::snprintf(label, sizeof(label), "constraints / features##%zu", i);
-        ImGui::PlotLines(label, state.constraints[i].data(), static_cast<int>(state.constraints[i].size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(avail * 0.3f, 44));
+        std::snprintf(id, sizeof(id), "##constraints%zu", i);
+        std::snprintf(text, sizeof(text), "constraints %d", state.constraints[i].empty() ? 0 : static_cast<int>(state.constraints[i].back()));
+        ImGui::PlotLines(id, state.constraints[i].data(), static_cast<int>(state.constraints[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+        ImGui::SameLine();
+        std::snprintf(id, sizeof(id), "##gated%zu", i);
+        std::snprintf(text, sizeof(text), "gated visual updates %d", p.last(i).gated);
+        ImGui::PlotLines(id, state.gated[i].data(), static_cast<int>(state.gated[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
       }
       ImGui::EndTabItem();
     }
@@ -380,6 +421,18 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
       tex.virtual_edges.Show(w);
       ImGui::SameLine();
       tex.difference.Show(w);
+      ImGui::Text("Harris corners (kept green)");
+      ImGui::SameLine(w + 8);
+      ImGui::Text("contour pieces");
+      ImGui::SameLine(2 * w + 16);
+      ImGui::Text("matches (RANSAC inliers green)");
+      tex.corners.Show(w);
+      ImGui::SameLine();
+      tex.pieces.Show(w);
+      ImGui::SameLine();
+      tex.matches.Show(w);
+      ImGui::Text("Hough votes per corner");
+      tex.votes.Show(avail);
       const MatchResult& m = p.last_feature_step().match;
       ImGui::Text("%zu virtual corners, %zu Hough matches, %d RANSAC inliers (inhand match writes every stage)",
                   m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());

@@ -77,6 +77,7 @@ void Pipeline::Step(int k) {
     r.step_time_us = us;
     r.constraints = f.trace().num_constraints;
     r.contacts = static_cast<int>(f.trace().contacts.size());
+    r.gated = f.trace().num_gated;
     r.visual_ms = -1.0;
     r.visual_used = 0;
   }
@@ -108,6 +109,7 @@ void Pipeline::Step(int k) {
       if (!sets_[i].tags) continue;
       const auto update_start = std::chrono::steady_clock::now();
       last_[i].visual_used = filters_[i]->UpdateVisual(features_, frames[static_cast<std::size_t>(f)].T_PC, K);
+      last_[i].gated += filters_[i]->trace().num_gated;
       last_[i].visual_ms = detect_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - update_start).count();
       last_[i].T_PO = filters_[i]->T_PO();
     }
@@ -177,6 +179,10 @@ void Pipeline::FeatureUpdate(std::size_t set, int frame) {
   fs.residual_before.clear();
   for (const VisualFeature& v : features_) fs.residual_before.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
   last_[set].visual_used = f.UpdateVisual(features_, cf.T_PC, K);
+  last_[set].gated += f.trace().num_gated;
+  double m2 = 0.0;
+  for (const FilterTrace::Visual& v : f.trace().visual) m2 += v.mahalanobis;
+  last_[set].visual_mahalanobis = f.trace().visual.empty() ? 0.0 : m2 / static_cast<double>(f.trace().visual.size());
   fs.residual_after.clear();
   for (const VisualFeature& v : features_) fs.residual_after.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
   last_[set].visual_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -242,26 +248,26 @@ Image8 FrameComposer::Compose(int camera_frame, double t, const OverlayLayers& l
   renderer_.Render(BelievedScene(f, frame.T_PC, K, hand_meshes_, object_meshes_, Vec3(0.12, 0.12, 0.14)), virtual_out, false);
 
   // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
-  Scene orbit;
-  orbit.K = K;
-  orbit.background = Vec3(0.93, 0.94, 0.96);
+  Scene outside;
+  outside.K = K;
+  outside.background = Vec3(0.93, 0.94, 0.96);
   const Aabb box = p_.models().object.Bounds();
   const Vec3 centre = p_.last(last).T_PO * box.Center();
-  orbit.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), 0.42, -2.2, 0.55, Vec3::UnitY());
-  AddHand(orbit, hand_meshes_, f.kinematics().link_poses(), 1.0);
+  outside.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), orbit.distance, orbit.azimuth, orbit.elevation, Vec3::UnitY());
+  AddHand(outside, hand_meshes_, f.kinematics().link_poses(), 1.0);
   if (s.has_groundtruth()) {
     ObjectStyle truth;
     truth.rgba = Eigen::Vector4d(0.15, 0.15, 0.15, 1.0);
-    AddObject(orbit, object_meshes_, s.GroundTruthAt(t), truth);
+    AddObject(outside, object_meshes_, s.GroundTruthAt(t), truth);
   }
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     ObjectStyle style;
     const Rgb& c = p_.sets()[i].colour;
     style.rgba = Eigen::Vector4d(c.r / 255.0, c.g / 255.0, c.b / 255.0, 0.45);
-    AddObject(orbit, object_meshes_, p_.last(i).T_PO, style);
+    AddObject(outside, object_meshes_, p_.last(i).T_PO, style);
   }
   RenderOutput orbit_out;
-  renderer_.Render(orbit, orbit_out, false);
+  renderer_.Render(outside, orbit_out, false);
   return SideBySide({&annotated, &virtual_out.colour, &orbit_out.colour},
                     {"camera + estimates (truth dashed)", "virtual view at " + p_.sets()[last].name + " estimate",
                      "3-D view: truth dark, estimates translucent"});

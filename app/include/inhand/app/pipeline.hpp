@@ -39,6 +39,8 @@ struct EstimateRecord {
   double step_time_us = 0.0;
   int constraints = 0;
   int contacts = 0;
+  int gated = 0;            // measurement blocks rejected by a gate in this sample
+  double visual_mahalanobis = 0.0;  // mean over the features of the last visual update
   double nees = std::numeric_limits<double>::quiet_NaN();  // 6-D pose error against P, when truth exists
   double visual_ms = -1.0;  // last visual step (detection + update) when one ran at this sample
   int visual_used = 0;      // features used by it
@@ -102,6 +104,12 @@ class FrameComposer {
  public:
   explicit FrameComposer(const Pipeline& pipeline);
   Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {});
+  // The external 3-D view's orbit around the object (the GUI drags it).
+  struct Orbit {
+    double azimuth = -2.2;   // [rad]
+    double elevation = 0.55; // [rad]
+    double distance = 0.42;  // [m]
+  } orbit;
 
  private:
   const Pipeline& p_;
