@@ -120,6 +120,8 @@ void Pipeline::Step(int k) {
       const Transform gt = session_.GroundTruthAt(t);
       r.position_error = (r.T_PO.translation() - gt.translation()).norm();
       r.orientation_error = RotationDistance(r.T_PO.linear(), gt.linear());
+      r.position_error_O = gt.linear().transpose() * (r.T_PO.translation() - gt.translation());
+      r.orientation_error_O = LogSO3(gt.linear().transpose() * r.T_PO.linear());
       // Normalised estimation error squared of the pose, in the filter's error convention
       // (p = p̂ + δp, R = Exp(δθ) R̂).
       Vec6 e;

@@ -155,6 +155,9 @@ int RunReplay(const ReplayCommand& cmd) {
     if (st.with_truth > 0) {
       s["terminal_position_error_mm"] = st.last.position_error * 1000;
       s["terminal_orientation_error_deg"] = st.last.orientation_error * 180 / M_PI;
+      const Vec3 dp = st.last.position_error_O * 1000, dr = st.last.orientation_error_O * (180 / M_PI);
+      s["terminal_position_error_object_axes_mm"] = {dp.x(), dp.y(), dp.z()};
+      s["terminal_orientation_error_object_axes_deg"] = {dr.x(), dr.y(), dr.z()};
       s["rms_position_error_mm"] = std::sqrt(st.sq_pos / st.with_truth) * 1000;
       s["rms_orientation_error_deg"] = std::sqrt(st.sq_ori / st.with_truth) * 180 / M_PI;
       // Consistency: the NEES of a consistent filter follows χ²₆ (mean 6; 95 % in [1.24, 14.45]).

@@ -36,6 +36,10 @@ struct EstimateRecord {
   Eigen::VectorXd biases;
   double position_error = std::numeric_limits<double>::quiet_NaN();     // [m] when truth exists
   double orientation_error = std::numeric_limits<double>::quiet_NaN();  // [rad]
+  // The same errors per axis of the true object frame (estimate − truth), so the degrees of
+  // freedom the fingers leave unobservable (along and about a bottle's axis) can be read apart.
+  Vec3 position_error_O = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());     // [m]
+  Vec3 orientation_error_O = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // [rad], R_gtᵀ R̂ = Exp(·)
   double step_time_us = 0.0;
   int constraints = 0;
   int contacts = 0;

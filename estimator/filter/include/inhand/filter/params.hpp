@@ -8,15 +8,21 @@ namespace inhand {
 struct FilterParams {
   // --- contacts (estimator-math.md, kinematic update)
   double contact_sigma = 0.001;               // [m] σ of the zero-distance constraint, per axis
-  bool contact_normal_only = false;           // false: the paper's 3-D constraint; true: only
-                                              // along the contact normal (allows sliding)
+  bool contact_normal_only = true;            // true: only along the contact normal (sliding
+                                              // allowed); false: the paper's 3-D constraint,
+                                              // which also pins the tangential directions a
+                                              // closest-point pair cannot observe (a bottle's
+                                              // axis) and makes the filter overconfident: mean
+                                              // NEES in the thousands, tags gated away
   int contact_iterations = 1;                 // 1: one update per step (paper); >1: re-run GJK
                                               // and update again (iterated EKF)
   double contact_gate_chi2 = 0.0;             // Mahalanobis gate per contact; 0 disables
   double prediction_contact_distance = 0.001; // [m] pairs this close (or penetrating) move the
                                               // object with the fingers in Predict
   // --- torque contacts (paper Sec. III-B)
-  double torque_candidate_distance = 0.015;   // [m] closest pairs within this distance are candidates
+  double torque_candidate_distance = 0.006;   // [m] closest pairs within this distance are
+                                              // candidates; at 15 mm torques pulled far links
+                                              // onto the object (evaluation in issue 7's note)
   double friction_cone_deg = 45.0;            // [deg] half-angle around the inward normal
   double force_min = 2.0;                     // [N] smaller estimated forces are ignored
   double torque_damping = 1e-6;               // [m²] damping of (J_cᵀ)⁺
