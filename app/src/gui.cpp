@@ -161,7 +161,7 @@ struct GuiState {
   std::deque<Action> actions;
   std::string status;
   // Histories over samples, per modality set.
-  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints, features, gated;
+  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints, features, gated, innovation;
   bool pictures_dirty = true;
 };
 
@@ -174,7 +174,7 @@ class Runner {
     next_ = 0;
     last_frame_ = -1;
     const std::size_t sets = pipeline_->sets().size();
-    for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features, &state_.gated})
+    for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features, &state_.gated, &state_.innovation})
       h->assign(sets, {});
     StepTo(0);
   }
@@ -192,6 +192,7 @@ class Runner {
         state_.constraints[i].push_back(static_cast<float>(r.constraints));
         state_.features[i].push_back(static_cast<float>(r.visual_used));
         state_.gated[i].push_back(static_cast<float>(r.gated));
+        state_.innovation[i].push_back(static_cast<float>(r.visual_mahalanobis));
       }
       if (pipeline_->last_frame() >= 0) last_frame_ = pipeline_->last_frame(), state_.pictures_dirty = true;
       ++next_;
@@ -382,7 +383,10 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##sig%zu", i);
-        std::snprintf(text, sizeof(text), "position sigma %.1f mm", sp.empty() ? 0.f : sp.back());
+        const EstimateRecord& last = p.last(i);
+        std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm, %.1f/%.1f/%.1f deg", last.sigma_position.x() * 1000,
+                      last.sigma_position.y() * 1000, last.sigma_position.z() * 1000, last.sigma_orientation.x() * 180 / M_PI,
+                      last.sigma_orientation.y() * 180 / M_PI, last.sigma_orientation.z() * 180 / M_PI);
         ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
         ImGui::PopStyleColor();
       }
@@ -393,10 +397,14 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         const auto& b = p.last(i).biases;
         std::vector<float> deg(static_cast<std::size_t>(b.size()));
         for (long j = 0; j < b.size(); ++j) deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
-        const float w = (avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
+        const float w = (avail - 3 * ImGui::GetStyle().ItemSpacing.x) / 4;
+        const Rgb& c = p.sets()[i].colour;
+        const ImVec4 colour(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f);
+        ImGui::PushStyleColor(ImGuiCol_PlotLines, colour);
+        ImGui::PushStyleColor(ImGuiCol_PlotHistogram, colour);
         char id[48], text[96];
         std::snprintf(id, sizeof(id), "##bias%zu", i);
-        std::snprintf(text, sizeof(text), "%s joint biases [deg], range +-6", p.sets()[i].name.c_str());
+        std::snprintf(text, sizeof(text), "%s biases [deg], +-6", p.sets()[i].name.c_str());
         ImGui::PlotHistogram(id, deg.data(), static_cast<int>(deg.size()), 0, text, -6.0f, 6.0f, ImVec2(w, 44));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##constraints%zu", i);
@@ -404,8 +412,13 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         ImGui::PlotLines(id, state.constraints[i].data(), static_cast<int>(state.constraints[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##gated%zu", i);
-        std::snprintf(text, sizeof(text), "gated visual updates %d", p.last(i).gated);
+        std::snprintf(text, sizeof(text), "gated features %d", p.last(i).gated);
         ImGui::PlotLines(id, state.gated[i].data(), static_cast<int>(state.gated[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+        ImGui::SameLine();
+        std::snprintf(id, sizeof(id), "##innovation%zu", i);
+        std::snprintf(text, sizeof(text), "innovation (Mahal.) %.1f", p.last(i).visual_mahalanobis);
+        ImGui::PlotLines(id, state.innovation[i].data(), static_cast<int>(state.innovation[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+        ImGui::PopStyleColor(2);
       }
       ImGui::EndTabItem();
     }
