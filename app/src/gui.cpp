@@ -17,6 +17,7 @@
 #include <deque>
 #include <exception>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <thread>
 #include <fstream>
@@ -169,19 +170,35 @@ class Runner {
  public:
   Runner(Session& session, GuiState& state) : session_(session), state_(state) { Restart(); }
   void Restart() {
-    pipeline_ = std::make_unique<Pipeline>(session_, state_.params, DefaultModalities(session_));
+    pipeline_ = std::make_unique<Pipeline>(session_, state_.params);
     composer_ = std::make_unique<FrameComposer>(*pipeline_);
     next_ = 0;
     last_frame_ = -1;
+    checkpoints_.clear();
     const std::size_t sets = pipeline_->sets().size();
     for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features, &state_.gated, &state_.innovation})
       h->assign(sets, {});
     StepTo(0);
   }
-  // Deterministic: going back recomputes from the start, so a seek never drifts.
+  // Deterministic: going back resumes from the nearest checkpoint at or before k (the run from
+  // there is bit-identical to the first), so a seek never drifts and costs at most
+  // kCheckpointEvery samples.
   void StepTo(int k) {
     k = std::clamp(k, 0, session_.num_samples() - 1);
-    if (k < next_ - 1) Restart();
+    if (k < next_ - 1) {
+      auto it = checkpoints_.upper_bound(k + 1);  // first checkpoint after the wanted one
+      if (it == checkpoints_.begin()) {
+        Restart();
+      } else {
+        --it;
+        pipeline_->Restore(it->second.pipeline);
+        next_ = it->first;
+        last_frame_ = it->second.last_frame;
+        for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features, &state_.gated, &state_.innovation})
+          for (auto& series : *h) series.resize(static_cast<std::size_t>(next_));
+        state_.pictures_dirty = true;
+      }
+    }
     while (next_ <= k) {
       pipeline_->Step(next_);
       for (std::size_t i = 0; i < pipeline_->sets().size(); ++i) {
@@ -196,6 +213,8 @@ class Runner {
       }
       if (pipeline_->last_frame() >= 0) last_frame_ = pipeline_->last_frame(), state_.pictures_dirty = true;
       ++next_;
+      if (next_ % kCheckpointEvery == 0 && !checkpoints_.count(next_))
+        checkpoints_.emplace(next_, RunnerCheckpoint{pipeline_->Save(next_), last_frame_});
     }
   }
   void StepFrame() {
@@ -224,6 +243,13 @@ class Runner {
   std::unique_ptr<FrameComposer> composer_;
   int next_ = 0;
   int last_frame_ = -1;
+  // Keyed by the sample the run resumes at; ~10 per minute of a 500 Hz session, a few MB each.
+  static constexpr int kCheckpointEvery = 250;
+  struct RunnerCheckpoint {
+    Pipeline::Checkpoint pipeline;
+    int last_frame;
+  };
+  std::map<int, RunnerCheckpoint> checkpoints_;
 };
 
 struct Textures {

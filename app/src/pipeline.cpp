@@ -25,15 +25,11 @@ std::vector<ModalitySet> ParseModalities(const std::string& list) {
   return out;
 }
 
-std::vector<ModalitySet> DefaultModalities(const Session& session) {
-  // Tags need images; whether the object carries tags is known once the models are loaded, and
-  // a jta filter without tags simply equals jt.
-  return ParseModalities(session.info().camera ? "j,jt,jta,jtf" : "j,jt");
-}
-
 Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets)
     : session_(session), models_(LoadSessionModels(session, true)), params_(params), sets_(std::move(sets)) {
   params_.Validate();
+  if (sets_.empty())
+    sets_ = ParseModalities(!session_.info().camera ? "j,jt" : models_.object.tags.empty() ? "j,jt,jtf" : "j,jt,jta,jtf");
   for (const ModalitySet& s : sets_) {
     queries_.push_back(std::make_unique<BulletContactQuery>(models_.hand, models_.object));
     filters_.push_back(std::make_unique<Filter>(models_.hand, *queries_.back(), params_, s.torque));
@@ -55,6 +51,33 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
     p.family = models_.object.tags.front().family;
     tag_detector_ = std::make_unique<TagDetector>(p);
   }
+}
+
+Pipeline::Checkpoint Pipeline::Save(int next_sample) const {
+  Checkpoint c;
+  c.next_sample = next_sample;
+  c.filters.reserve(filters_.size());
+  for (const auto& f : filters_) c.filters.push_back(*f);
+  c.last = last_;
+  c.next_frame = next_frame_;
+  c.last_frame = last_frame_;
+  c.image = image_;
+  c.tags = tags_;
+  c.features = features_;
+  c.feature_step = feature_step_;
+  return c;
+}
+
+void Pipeline::Restore(const Checkpoint& c) {
+  INHAND_CHECK(c.filters.size() == filters_.size(), "checkpoint of a pipeline with other modality sets");
+  for (std::size_t i = 0; i < filters_.size(); ++i) filters_[i] = std::make_unique<Filter>(c.filters[i]);
+  last_ = c.last;
+  next_frame_ = c.next_frame;
+  last_frame_ = c.last_frame;
+  image_ = c.image;
+  tags_ = c.tags;
+  features_ = c.features;
+  feature_step_ = c.feature_step;
 }
 
 void Pipeline::Step(int k) {

@@ -62,8 +62,8 @@ int RunReplay(const ReplayCommand& cmd) {
     ss << in.rdbuf();
     params = FilterParamsFromJson(ss.str(), cmd.params);
   }
-  const std::vector<ModalitySet> sets = cmd.modalities.empty() ? DefaultModalities(session) : ParseModalities(cmd.modalities);
-  Pipeline pipeline(session, params, sets);
+  Pipeline pipeline(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
+  const std::vector<ModalitySet>& sets = pipeline.sets();
   const bool want_pictures = (!cmd.no_video || cmd.frames) && session.info().camera.has_value();
   std::unique_ptr<FrameComposer> composer;
   if (want_pictures) composer = std::make_unique<FrameComposer>(pipeline);

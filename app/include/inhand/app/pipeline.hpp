@@ -25,8 +25,6 @@ struct ModalitySet {
 };
 // Parses "j,jt,..."; throws InputError for unknown or not yet supported sets.
 std::vector<ModalitySet> ParseModalities(const std::string& list);
-// Every set this build can run on this session.
-std::vector<ModalitySet> DefaultModalities(const Session& session);
 
 struct EstimateRecord {
   double t = 0.0;
@@ -52,7 +50,9 @@ struct EstimateRecord {
 
 class Pipeline {
  public:
-  Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets);
+  // `sets` empty: every set the session supports (jta only when the object carries tags, jta and
+  // jtf only with camera images).
+  Pipeline(Session& session, const FilterParams& params, std::vector<ModalitySet> sets = {});
   int num_samples() const { return session_.num_samples(); }
   // Runs every filter on joint sample k (k = 0 initialises them), then the visual updates of
   // the camera frames that arrived since the previous sample.
@@ -72,6 +72,23 @@ class Pipeline {
     std::vector<double> residual_before, residual_after;  // [px]
   };
   const FeatureStep& last_feature_step() const { return feature_step_; }
+  // Everything Step changes. Restoring one and stepping on gives bit-identical estimates to an
+  // uninterrupted run (the contact query keeps no state between calls), so the GUI seeks back
+  // from the nearest checkpoint instead of from the start.
+  struct Checkpoint {
+    int next_sample = 0;  // the sample the next Step(k) must process
+    std::vector<Filter> filters;
+    std::vector<EstimateRecord> last;
+    std::size_t next_frame = 0;
+    int last_frame = -1;
+    Image8 image;
+    std::vector<TagDetection> tags;
+    std::vector<VisualFeature> features;
+    FeatureStep feature_step;
+  };
+  // `next_sample`: the sample after the last one stepped.
+  Checkpoint Save(int next_sample) const;
+  void Restore(const Checkpoint& c);
   FeatureParams& feature_params() { return feature_params_; }
   const std::vector<ModalitySet>& sets() const { return sets_; }
   const Filter& filter(std::size_t i) const { return *filters_[i]; }
