@@ -181,8 +181,8 @@ class Runner {
     StepTo(0);
   }
   // Deterministic: going back resumes from the nearest checkpoint at or before k (the run from
-  // there is bit-identical to the first), so a seek never drifts and costs at most
-  // kCheckpointEvery samples.
+  // there is bit-identical to the first), so a seek never drifts and recomputes at most
+  // CheckpointEvery() samples.
   void StepTo(int k) {
     k = std::clamp(k, 0, session_.num_samples() - 1);
     if (k < next_ - 1) {
@@ -213,7 +213,7 @@ class Runner {
       }
       if (pipeline_->last_frame() >= 0) last_frame_ = pipeline_->last_frame(), state_.pictures_dirty = true;
       ++next_;
-      if (next_ % kCheckpointEvery == 0 && !checkpoints_.count(next_))
+      if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_))
         checkpoints_.emplace(next_, RunnerCheckpoint{pipeline_->Save(next_), last_frame_});
     }
   }
@@ -243,8 +243,9 @@ class Runner {
   std::unique_ptr<FrameComposer> composer_;
   int next_ = 0;
   int last_frame_ = -1;
-  // Keyed by the sample the run resumes at; ~10 per minute of a 500 Hz session, a few MB each.
-  static constexpr int kCheckpointEvery = 250;
+  // Keyed by the sample the run resumes at. A checkpoint holds the last camera and virtual
+  // images (a few MB): every 250 samples (0.5 s at 500 Hz), at most ~50 per session.
+  int CheckpointEvery() const { return std::max(250, session_.num_samples() / 50); }
   struct RunnerCheckpoint {
     Pipeline::Checkpoint pipeline;
     int last_frame;
