@@ -10,6 +10,7 @@
 #include <imgui_impl_opengl3.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -176,7 +177,7 @@ class Runner {
     last_frame_ = -1;
     checkpoints_.clear();
     const std::size_t sets = pipeline_->sets().size();
-    for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features, &state_.gated, &state_.innovation})
+    for (auto* h : Histories())
       h->assign(sets, {});
     StepTo(0);
   }
@@ -194,7 +195,7 @@ class Runner {
         pipeline_->Restore(it->second.pipeline);
         next_ = it->first;
         last_frame_ = it->second.last_frame;
-        for (auto* h : {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints, &state_.features, &state_.gated, &state_.innovation})
+        for (auto* h : Histories())
           for (auto& series : *h) series.resize(static_cast<std::size_t>(next_));
         state_.pictures_dirty = true;
       }
@@ -214,7 +215,7 @@ class Runner {
       if (pipeline_->last_frame() >= 0) last_frame_ = pipeline_->last_frame(), state_.pictures_dirty = true;
       ++next_;
       if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_))
-        checkpoints_.emplace(next_, RunnerCheckpoint{pipeline_->Save(next_), last_frame_});
+        checkpoints_.emplace(next_, RunnerCheckpoint{pipeline_->Save(), last_frame_});
     }
   }
   void StepFrame() {
@@ -251,6 +252,11 @@ class Runner {
     int last_frame;
   };
   std::map<int, RunnerCheckpoint> checkpoints_;
+  // Every per-sample history of the plots (one series per modality set).
+  std::array<std::vector<std::vector<float>>*, 7> Histories() {
+    return {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints,
+            &state_.features, &state_.gated, &state_.innovation};
+  }
 };
 
 struct Textures {

@@ -34,7 +34,7 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
     queries_.push_back(std::make_unique<BulletContactQuery>(models_.hand, models_.object));
     filters_.push_back(std::make_unique<Filter>(models_.hand, *queries_.back(), params_, s.torque));
   }
-  last_.resize(sets_.size());
+  state_.last.resize(sets_.size());
   bool tags = false, features = false;
   for (const ModalitySet& m : sets_) tags = tags || m.tags, features = features || m.features;
   if (features) {
@@ -53,31 +53,18 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
   }
 }
 
-Pipeline::Checkpoint Pipeline::Save(int next_sample) const {
+Pipeline::Checkpoint Pipeline::Save() const {
   Checkpoint c;
-  c.next_sample = next_sample;
   c.filters.reserve(filters_.size());
   for (const auto& f : filters_) c.filters.push_back(*f);
-  c.last = last_;
-  c.next_frame = next_frame_;
-  c.last_frame = last_frame_;
-  c.image = image_;
-  c.tags = tags_;
-  c.features = features_;
-  c.feature_step = feature_step_;
+  c.state = state_;
   return c;
 }
 
 void Pipeline::Restore(const Checkpoint& c) {
   INHAND_CHECK(c.filters.size() == filters_.size(), "checkpoint of a pipeline with other modality sets");
   for (std::size_t i = 0; i < filters_.size(); ++i) filters_[i] = std::make_unique<Filter>(c.filters[i]);
-  last_ = c.last;
-  next_frame_ = c.next_frame;
-  last_frame_ = c.last_frame;
-  image_ = c.image;
-  tags_ = c.tags;
-  features_ = c.features;
-  feature_step_ = c.feature_step;
+  state_ = c.state;
 }
 
 void Pipeline::Step(int k) {
@@ -91,7 +78,7 @@ void Pipeline::Step(int k) {
     f.Predict(session_.q(k), dt);
     f.UpdateContacts(session_.tau(k));
     const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
-    EstimateRecord& r = last_[i];
+    EstimateRecord& r = state_.last[i];
     r.t = t;
     r.T_PO = f.T_PO();
     r.sigma_position = f.covariance().diagonal().head<3>().cwiseSqrt();
@@ -107,38 +94,38 @@ void Pipeline::Step(int k) {
 
   // Camera frames that arrived by this sample: tag corners for the sets that use them.
   const auto& frames = session_.camera_frames();
-  last_frame_ = -1;
-  while (next_frame_ < frames.size() && frames[next_frame_].t <= t + 1e-9) {
-    const int f = static_cast<int>(next_frame_++);
-    last_frame_ = f;
-    image_ = session_.LoadImage(f);
-    tags_.clear();
+  state_.last_frame = -1;
+  while (state_.next_frame < frames.size() && frames[state_.next_frame].t <= t + 1e-9) {
+    const int f = static_cast<int>(state_.next_frame++);
+    state_.last_frame = f;
+    state_.image = session_.LoadImage(f);
+    state_.tags.clear();
     for (std::size_t i = 0; i < filters_.size(); ++i)
       if (sets_[i].features) FeatureUpdate(i, f);
     if (!tag_detector_) continue;
     const Intrinsics& K = *info.camera;
     const auto start = std::chrono::steady_clock::now();
-    tags_ = tag_detector_->Detect(image_);
-    features_.clear();
-    for (const TagDetection& d : tags_)
+    state_.tags = tag_detector_->Detect(state_.image);
+    state_.features.clear();
+    for (const TagDetection& d : state_.tags)
       for (const TagPlacement& tag : models_.object.tags) {
         if (tag.id != d.id || tag.family != d.family) continue;
         const auto corners = tag.CornersO();
         for (int c = 0; c < 4; ++c)
-          features_.push_back({d.id * 4 + c, corners[static_cast<std::size_t>(c)], K.Undistort(d.corners[static_cast<std::size_t>(c)])});
+          state_.features.push_back({d.id * 4 + c, corners[static_cast<std::size_t>(c)], K.Undistort(d.corners[static_cast<std::size_t>(c)])});
       }
     const double detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     for (std::size_t i = 0; i < filters_.size(); ++i) {
       if (!sets_[i].tags) continue;
       const auto update_start = std::chrono::steady_clock::now();
-      last_[i].visual_used = filters_[i]->UpdateVisual(features_, frames[static_cast<std::size_t>(f)].T_PC, K);
-      last_[i].gated += filters_[i]->trace().num_gated;
-      last_[i].visual_ms = detect_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - update_start).count();
-      last_[i].T_PO = filters_[i]->T_PO();
+      state_.last[i].visual_used = filters_[i]->UpdateVisual(state_.features, frames[static_cast<std::size_t>(f)].T_PC, K);
+      state_.last[i].gated += filters_[i]->trace().num_gated;
+      state_.last[i].visual_ms = detect_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - update_start).count();
+      state_.last[i].T_PO = filters_[i]->T_PO();
     }
   }
   for (std::size_t i = 0; i < filters_.size(); ++i) {
-    EstimateRecord& r = last_[i];
+    EstimateRecord& r = state_.last[i];
     if (session_.has_groundtruth()) {
       const Transform gt = session_.GroundTruthAt(t);
       r.position_error = (r.T_PO.translation() - gt.translation()).norm();
@@ -179,15 +166,15 @@ void Pipeline::FeatureUpdate(std::size_t set, int frame) {
   const CameraFrame& cf = session_.camera_frames()[static_cast<std::size_t>(frame)];
   const auto start = std::chrono::steady_clock::now();
   // The virtual image: the scene as this filter believes it, from the camera.
-  FeatureStep& fs = feature_step_;
+  FeatureStep& fs = state_.feature_step;
   fs.frame = frame;
   renderer_->Render(BelievedScene(f, cf.T_PC, K, hand_meshes_, object_meshes_, Vec3(0.5, 0.5, 0.5)), fs.virtual_view, true);
   std::vector<std::uint8_t> mask(fs.virtual_view.label.size());
   for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = fs.virtual_view.label[i] == kObjectLabel;
-  fs.match = MatchFeatures(image_, fs.virtual_view.colour, &mask, feature_params_);
+  fs.match = MatchFeatures(state_.image, fs.virtual_view.colour, &mask, feature_params_);
   // Inliers to object points through the virtual depth, moved into O with the estimate.
   const Transform T_OP = f.T_PO().inverse();
-  features_.clear();
+  state_.features.clear();
   fs.used_match.clear();
   for (std::size_t m = 0; m < fs.match.matches.size(); ++m) {
     const FeatureMatch& match = fs.match.matches[m];
@@ -197,21 +184,21 @@ void Pipeline::FeatureUpdate(std::size_t set, int frame) {
     const float z = fs.virtual_view.depth_at(x, y);
     if (!std::isfinite(z)) continue;
     const Vec3 X_P = cf.T_PC * K.Unproject(match.virtual_px, z);
-    features_.push_back({match.id, T_OP * X_P, K.Undistort(match.real_px)});
+    state_.features.push_back({match.id, T_OP * X_P, K.Undistort(match.real_px)});
     fs.used_match.push_back(static_cast<int>(m));
   }
   const Transform T_CP = cf.T_PC.inverse();
   fs.residual_before.clear();
-  for (const VisualFeature& v : features_) fs.residual_before.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
-  last_[set].visual_used = f.UpdateVisual(features_, cf.T_PC, K);
-  last_[set].gated += f.trace().num_gated;
+  for (const VisualFeature& v : state_.features) fs.residual_before.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
+  state_.last[set].visual_used = f.UpdateVisual(state_.features, cf.T_PC, K);
+  state_.last[set].gated += f.trace().num_gated;
   double m2 = 0.0;
   for (const FilterTrace::Visual& v : f.trace().visual) m2 += v.mahalanobis;
-  last_[set].visual_mahalanobis = f.trace().visual.empty() ? 0.0 : m2 / static_cast<double>(f.trace().visual.size());
+  state_.last[set].visual_mahalanobis = f.trace().visual.empty() ? 0.0 : m2 / static_cast<double>(f.trace().visual.size());
   fs.residual_after.clear();
-  for (const VisualFeature& v : features_) fs.residual_after.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
-  last_[set].visual_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  last_[set].T_PO = f.T_PO();
+  for (const VisualFeature& v : state_.features) fs.residual_after.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
+  state_.last[set].visual_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  state_.last[set].T_PO = f.T_PO();
 }
 
 namespace {

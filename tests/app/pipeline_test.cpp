@@ -20,7 +20,7 @@ TEST(Pipeline, CheckpointResumesBitIdentically) {
   ASSERT_EQ(pipeline.sets().size(), 4u);
   const int mid = 400, end = 900;  // 500 Hz joints, 10 Hz camera: ten frames in between
   for (int k = 0; k < mid; ++k) pipeline.Step(k);
-  const Pipeline::Checkpoint checkpoint = pipeline.Save(mid);
+  const Pipeline::Checkpoint checkpoint = pipeline.Save();
   std::vector<std::vector<Transform>> first(pipeline.sets().size());
   std::vector<Eigen::MatrixXd> first_P;
   for (int k = mid; k < end; ++k) {

@@ -58,9 +58,9 @@ class Pipeline {
   // the camera frames that arrived since the previous sample.
   void Step(int k);
   // The camera frame the last Step processed (-1: none) and its image.
-  int last_frame() const { return last_frame_; }
-  const Image8& last_image() const { return image_; }
-  const std::vector<TagDetection>& last_tags() const { return tags_; }
+  int last_frame() const { return state_.last_frame; }
+  const Image8& last_image() const { return state_.image; }
+  const std::vector<TagDetection>& last_tags() const { return state_.tags; }
   // The extracted-feature step of the last frame (sets with features): the virtual image, the
   // matches with every stage's output, and each used feature's pixel residual before and after
   // the update.
@@ -71,13 +71,11 @@ class Pipeline {
     std::vector<int> used_match;      // index into match.matches of each feature used
     std::vector<double> residual_before, residual_after;  // [px]
   };
-  const FeatureStep& last_feature_step() const { return feature_step_; }
-  // Everything Step changes. Restoring one and stepping on gives bit-identical estimates to an
-  // uninterrupted run (the contact query keeps no state between calls), so the GUI seeks back
-  // from the nearest checkpoint instead of from the start.
-  struct Checkpoint {
-    int next_sample = 0;  // the sample the next Step(k) must process
-    std::vector<Filter> filters;
+  const FeatureStep& last_feature_step() const { return state_.feature_step; }
+
+ private:
+  // Everything Step changes besides the filters.
+  struct StepState {
     std::vector<EstimateRecord> last;
     std::size_t next_frame = 0;
     int last_frame = -1;
@@ -86,13 +84,21 @@ class Pipeline {
     std::vector<VisualFeature> features;
     FeatureStep feature_step;
   };
-  // `next_sample`: the sample after the last one stepped.
-  Checkpoint Save(int next_sample) const;
+
+ public:
+  // Restoring a checkpoint and stepping on gives bit-identical estimates to an uninterrupted
+  // run (the contact query keeps no state between calls), so the GUI seeks back from the
+  // nearest checkpoint instead of from the start.
+  struct Checkpoint {
+    std::vector<Filter> filters;
+    StepState state;
+  };
+  Checkpoint Save() const;
   void Restore(const Checkpoint& c);
   FeatureParams& feature_params() { return feature_params_; }
   const std::vector<ModalitySet>& sets() const { return sets_; }
   const Filter& filter(std::size_t i) const { return *filters_[i]; }
-  const EstimateRecord& last(std::size_t i) const { return last_[i]; }
+  const EstimateRecord& last(std::size_t i) const { return state_.last[i]; }
   const Session& session() const { return session_; }
   const SessionModels& models() const { return models_; }
   const FilterParams& params() const { return params_; }
@@ -104,18 +110,12 @@ class Pipeline {
   std::vector<ModalitySet> sets_;
   std::vector<std::unique_ptr<BulletContactQuery>> queries_;
   std::vector<std::unique_ptr<Filter>> filters_;
-  std::vector<EstimateRecord> last_;
+  StepState state_;
   std::unique_ptr<TagDetector> tag_detector_;
-  std::size_t next_frame_ = 0;
-  int last_frame_ = -1;
-  Image8 image_;
-  std::vector<TagDetection> tags_;
-  std::vector<VisualFeature> features_;
   std::unique_ptr<Renderer> renderer_;
   HandMeshes hand_meshes_;
   std::vector<int> object_meshes_;
   FeatureParams feature_params_;
-  FeatureStep feature_step_;
   void FeatureUpdate(std::size_t set, int frame);
 };
 
