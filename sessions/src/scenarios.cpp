@@ -49,6 +49,14 @@ Transform Lifted(const Transform& T, double dz) {
   return out;
 }
 
+// A pinch rolled between index and thumb: the index flexes by `amount` [rad], the thumb
+// extends by as much, so the object held between the tips turns.
+std::map<std::string, double> Rolled(std::map<std::string, double> pinch, double amount) {
+  pinch["index_flex1"] += amount;
+  pinch["thumb_flex1"] -= amount;
+  return pinch;
+}
+
 Transform Back(const Transform& T, double d) {  // along the palm's -z
   Transform out = T;
   out.translation() -= d * T.linear().col(2);
@@ -91,9 +99,7 @@ std::vector<Scenario> Build() {
     // Palm down, fingers along +x across the handle; index and thumb tips meet around it.
     const Transform grasp = Pose(Vec3(-0.097, -0.036, 0.083), PalmAxes(Vec3(0, 1, 0), Vec3(1, 0, 0)));
     const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
-    auto roll_a = pinch, roll_b = pinch;
-    roll_a["index_flex1"] += 0.25, roll_a["thumb_flex1"] -= 0.25;
-    roll_b["index_flex1"] -= 0.25, roll_b["thumb_flex1"] += 0.25;
+    const auto roll_a = Rolled(pinch, 0.25), roll_b = Rolled(pinch, -0.25);
     s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
               Key(2.2, grasp, pinch, 0.8), Key(2.5, grasp, pinch, 0.8), Key(3.5, Lifted(grasp, 0.08), pinch, 0.8),
               Key(4.5, Lifted(grasp, 0.08), roll_a, 0.8), Key(5.5, Lifted(grasp, 0.08), roll_b, 0.8),
@@ -157,9 +163,7 @@ std::vector<Scenario> Build() {
     // Palm down, fingers along -y across the pen; index under, thumb on top, 2 cm from its end.
     const Transform grasp = Pose(Vec3(-0.077, 0.097, 0.0825), PalmAxes(Vec3(1, 0, 0), Vec3(0, -1, 0)));
     const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
-    auto roll_a = pinch, roll_b = pinch;
-    roll_a["index_flex1"] += 0.2, roll_a["thumb_flex1"] -= 0.2;
-    roll_b["index_flex1"] -= 0.2, roll_b["thumb_flex1"] += 0.2;
+    const auto roll_a = Rolled(pinch, 0.2), roll_b = Rolled(pinch, -0.2);
     s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
               Key(2.2, grasp, pinch, 0.6), Key(2.5, grasp, pinch, 0.6), Key(3.3, Lifted(grasp, 0.07), pinch, 0.6),
               Key(4.0, Lifted(grasp, 0.07), roll_a, 0.6), Key(4.7, Lifted(grasp, 0.07), roll_b, 0.6),
