@@ -549,13 +549,7 @@ int RunGui(const GuiCommand& cmd) {
   if (cmd.width < 640 || cmd.height < 480) throw InputError("gui: the window must be at least 640x480");
   Session session = Session::Load(cmd.session);
   GuiState state;
-  if (!cmd.params.empty()) {
-    std::ifstream in(cmd.params);
-    if (!in) throw InputError(cmd.params + ": cannot open the parameter file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    state.params = FilterParamsFromJson(ss.str(), cmd.params);
-  }
+  if (!cmd.params.empty()) state.params = ReadFilterParams(cmd.params);
   if (cmd.time >= 0.0) {
     int k = 0;
     while (k + 1 < session.num_samples() && session.t(k + 1) <= cmd.time) ++k;

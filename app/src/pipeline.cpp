@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <sstream>
 
@@ -9,6 +10,14 @@
 #include "inhand/kinematics/kinematics.hpp"
 
 namespace inhand::app {
+
+FilterParams ReadFilterParams(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the parameter file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return FilterParamsFromJson(ss.str(), path);
+}
 
 std::vector<ModalitySet> ParseModalities(const std::string& list) {
   std::vector<ModalitySet> out;

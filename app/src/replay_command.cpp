@@ -55,13 +55,7 @@ int RunReplay(const ReplayCommand& cmd) {
   if (cmd.out.empty()) throw InputError("replay: --out DIR is required");
   Session session = Session::Load(cmd.session);
   FilterParams params;
-  if (!cmd.params.empty()) {
-    std::ifstream in(cmd.params);
-    if (!in) throw InputError(cmd.params + ": cannot open the parameter file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    params = FilterParamsFromJson(ss.str(), cmd.params);
-  }
+  if (!cmd.params.empty()) params = ReadFilterParams(cmd.params);
   Pipeline pipeline(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
   const std::vector<ModalitySet>& sets = pipeline.sets();
   const bool want_pictures = (!cmd.no_video || cmd.frames) && session.info().camera.has_value();

@@ -23,6 +23,9 @@ struct ModalitySet {
   bool features = false;
   Rgb colour;
 };
+// Filter parameters from a JSON file as `replay` writes it (params.json); InputError naming the
+// file when it cannot be read or a field is wrong.
+FilterParams ReadFilterParams(const std::string& path);
 // Parses "j,jt,..."; throws InputError for unknown or not yet supported sets.
 std::vector<ModalitySet> ParseModalities(const std::string& list);
 
