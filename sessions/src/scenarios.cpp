@@ -49,12 +49,18 @@ Transform Lifted(const Transform& T, double dz) {
   return out;
 }
 
-// A pinch rolled between index and thumb: the index flexes by `amount` [rad], the thumb
-// extends by as much, so the object held between the tips turns.
-std::map<std::string, double> Rolled(std::map<std::string, double> pinch, double amount) {
-  pinch["index_flex1"] += amount;
-  pinch["thumb_flex1"] -= amount;
-  return pinch;
+// One finger's flexions, or the thumb's abduction and flexions, set in a hand pose.
+std::map<std::string, double> With(std::map<std::string, double> q, const std::string& finger, double a, double b,
+                                   double c) {
+  q[finger + "_flex1"] = a;
+  q[finger + "_flex2"] = b;
+  q[finger + "_flex3"] = c;
+  return q;
+}
+std::map<std::string, double> WithThumb(std::map<std::string, double> q, double abduction, double t1, double t2,
+                                        double t3) {
+  q["thumb_abduction"] = abduction;
+  return With(std::move(q), "thumb", t1, t2, t3);
 }
 
 Transform Back(const Transform& T, double d) {  // along the palm's -z
@@ -93,19 +99,34 @@ std::vector<Scenario> Build() {
   {  // Exp. II: fingertip grasp of a brush, then rolled in the hand by the thumb and the index.
     Scenario s;
     s.name = "brush-rotation";
-    s.description = "fingertip grasp of a brush's handle from above (index under, thumb on top), lift, roll it in the fingers";
+    s.description = "fingertip grasp of a brush's handle overhanging a book (index under, thumb on top), lift, roll it in the fingers";
     s.object = "brush";
-    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.0312), ExpSO3(Vec3(0, 0, M_PI / 2)));  // on its bristles, handle along y
-    // Palm down, fingers along +x across the handle; index and thumb tips meet around it.
-    const Transform grasp = Pose(Vec3(-0.097, -0.036, 0.083), PalmAxes(Vec3(0, 1, 0), Vec3(1, 0, 0)));
-    const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
-    const auto roll_a = Rolled(pinch, 0.25), roll_b = Rolled(pinch, -0.25);
+    Scenario::Prop book;
+    book.T_W = MakeTransform(Vec3(0.0, 0.09, 0.0125), Mat3::Identity());
+    book.half_extents = Vec3(0.075, 0.075, 0.0125);  // its edge at y = 0.015, under the head
+    book.rgba = Eigen::Vector4d(0.55, 0.2, 0.15, 1.0);
+    s.props.push_back(book);
+    // On its bristles on the book, the handle along -y over the edge (its axis at z = 56.2 mm).
+    s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.025 + 0.0312), ExpSO3(Vec3(0, 0, M_PI / 2)));
+    // Palm down, fingers along +x across the handle, 5 cm from the head; the pinch of the pen
+    // scenario solved again for the handle's radius (11.5 mm) with the palm 39 mm above its
+    // axis, where both contact normals are within 19 deg of the vertical. Rolled: 6 mm each.
+    const Transform grasp = Pose(Vec3(-0.097, -0.077, 0.0952), PalmAxes(Vec3(0, 1, 0), Vec3(1, 0, 0)));
+    const auto relaxed = With(With(open, "middle", 0.3, 1.0, 0.8), "ring", 0.3, 1.0, 0.8);
+    const auto under = With(relaxed, "index", 0.943, 0.813, 0.813);
+    const auto touch = WithThumb(With(relaxed, "index", 0.897, 0.917, 0.917), 1.076, -0.154, 1.234, 0.987);
+    const auto pinch = WithThumb(With(relaxed, "index", 0.879, 0.965, 0.965), 0.996, 0.135, 1.042, 0.833);
+    const auto roll_a = WithThumb(With(relaxed, "index", 0.984, 0.923, 0.923), 1.006, 0.146, 0.947, 0.757);
+    const auto roll_b = WithThumb(With(relaxed, "index", 0.776, 0.997, 0.997), 0.984, 0.14, 1.126, 0.901);
+    constexpr double kGrip = 0.8;
+    const Transform up = Lifted(grasp, 0.08);
     s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
-              Key(2.2, grasp, pinch, 0.8), Key(2.5, grasp, pinch, 0.8), Key(3.5, Lifted(grasp, 0.08), pinch, 0.8),
-              Key(4.5, Lifted(grasp, 0.08), roll_a, 0.8), Key(5.5, Lifted(grasp, 0.08), roll_b, 0.8),
-              Key(6.0, Lifted(grasp, 0.08), roll_b, 0.8)};
+              Key(2.0, grasp, under, kGrip), Key(2.4, grasp, touch, kGrip), Key(2.9, grasp, pinch, kGrip),
+              Key(3.1, grasp, pinch, kGrip), Key(4.1, up, pinch, kGrip), Key(4.9, up, roll_a, kGrip),
+              Key(5.7, up, roll_b, kGrip), Key(6.5, up, roll_a, kGrip), Key(6.8, up, roll_a, kGrip)};
     s.close_start = 1.2;
-    s.grasp_closed = 2.5;
+    s.grasp_closed = 3.1;
+    s.camera_target = Vec3(0.0, 0.0, 0.12);
     all.push_back(s);
   }
   {  // Exp. III: push a mostly transparent water bottle along the table, then grasp it.
@@ -160,17 +181,30 @@ std::vector<Scenario> Build() {
     book.rgba = Eigen::Vector4d(0.15, 0.35, 0.55, 1.0);
     s.props.push_back(book);
     s.T_WO = MakeTransform(Vec3(0.005, 0.0, 0.025 + 0.0055), Mat3::Identity());  // along x, 3.75 cm over the edge
-    // Palm down, fingers along -y across the pen; index under, thumb on top, 2 cm from its end.
+    // Palm down, fingers along -y across the pen, 1.75 cm from its end: the index curls under
+    // the overhanging end, the thumb comes down on top, and the two squeeze it.
+    // Targets from the hand's inverse kinematics (index flex3 = flex2; thumb flex3 = 0.8 flex2),
+    // for a pen axis at z = 31 mm: the index pad touches it from below-left with its contact
+    // normal 31 deg from the vertical (the palm is too high for a fingertip contact), so the
+    // thumb tip is placed on the same line from above-right, or the squeeze would push the pen
+    // out sideways. Each aims 2.5 mm inside the pen; the index first stops 2.6 mm short of it.
+    // Rolled: both tips moved 2.5 mm along the tangent, in opposite directions.
     const Transform grasp = Pose(Vec3(-0.077, 0.097, 0.0825), PalmAxes(Vec3(1, 0, 0), Vec3(0, -1, 0)));
-    const auto pinch = Hand(0.0, 0.9, 1.1, 0.6, 0.9, 0.6, 0.6, 0.5);
-    const auto roll_a = Rolled(pinch, 0.2), roll_b = Rolled(pinch, -0.2);
+    const auto relaxed = With(With(open, "middle", 0.3, 1.0, 0.8), "ring", 0.3, 1.0, 0.8);  // out of the way
+    const auto under = With(relaxed, "index", 1.039, 0.647, 0.647);
+    const auto touch = WithThumb(With(relaxed, "index", 0.994, 0.757, 0.757), 0.943, 0.23, 1.107, 0.886);
+    const auto pinch = WithThumb(With(relaxed, "index", 0.978, 0.807, 0.807), 0.855, 0.511, 0.801, 0.64);
+    const auto roll_a = WithThumb(With(relaxed, "index", 1.025, 0.777, 0.777), 0.873, 0.5, 0.778, 0.623);
+    const auto roll_b = WithThumb(With(relaxed, "index", 0.932, 0.835, 0.835), 0.835, 0.524, 0.821, 0.657);
+    constexpr double kGrip = 0.6;
+    const Transform up = Lifted(grasp, 0.07);
     s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
-              Key(2.2, grasp, pinch, 0.6), Key(2.5, grasp, pinch, 0.6), Key(3.3, Lifted(grasp, 0.07), pinch, 0.6),
-              Key(4.0, Lifted(grasp, 0.07), roll_a, 0.6), Key(4.7, Lifted(grasp, 0.07), roll_b, 0.6),
-              Key(5.4, Lifted(grasp, 0.07), roll_a, 0.6), Key(6.1, Lifted(grasp, 0.07), roll_b, 0.6),
-              Key(6.5, Lifted(grasp, 0.07), pinch, 0.6)};
+              Key(2.0, grasp, under, kGrip), Key(2.4, grasp, touch, kGrip), Key(2.9, grasp, pinch, kGrip),
+              Key(3.1, grasp, pinch, kGrip), Key(3.9, up, pinch, kGrip), Key(4.5, up, roll_a, kGrip),
+              Key(5.1, up, roll_b, kGrip), Key(5.7, up, roll_a, kGrip), Key(6.3, up, roll_b, kGrip),
+              Key(6.7, up, pinch, kGrip)};
     s.close_start = 1.2;
-    s.grasp_closed = 2.5;
+    s.grasp_closed = 3.1;
     s.camera_target = Vec3(-0.03, 0.0, 0.06);
     all.push_back(s);
   }

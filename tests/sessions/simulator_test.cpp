@@ -104,14 +104,14 @@ SimulationSummary Physics(const std::string& scenario) {
   return Simulate(o);
 }
 
-// Physical plausibility of the scenarios whose grasps hold (brush and pen: open work).
+// Physical plausibility of every scenario (the simulation speed is a benchmark:
+// tests/bench/bench_simulator.cpp).
 TEST(SimulatorPhysics, KetchupIsHeldLiftedAndTiltsInTheHand) {
   const SimulationSummary s = Physics("ketchup-power-grasp");
   EXPECT_GT(s.held_fraction, 0.95);
   EXPECT_GT(s.lift_height, 0.08);
   EXPECT_LT(s.max_penetration, 0.001);
   EXPECT_GT(s.tilt_in_hand_deg, 5.0);
-  EXPECT_LT(s.wall_time, 3.0 * s.duration);
 }
 
 TEST(SimulatorPhysics, WaterBottleIsPushedAlongTheTableThenHeld) {
@@ -120,6 +120,24 @@ TEST(SimulatorPhysics, WaterBottleIsPushedAlongTheTableThenHeld) {
   EXPECT_GT(s.held_fraction, 0.95);
   EXPECT_GT(s.lift_height, 0.08);
   EXPECT_LT(s.max_penetration, 0.001);
+}
+
+// The fingertip grasps: held between the index and the thumb from the moment the fingers have
+// closed, lifted off their book, and rolled in the fingers by more than 10 deg.
+TEST(SimulatorPhysics, BrushIsPinchedLiftedAndRolledInTheFingers) {
+  const SimulationSummary s = Physics("brush-rotation");
+  EXPECT_GT(s.held_fraction, 0.95);
+  EXPECT_GT(s.lift_height, 0.06);
+  EXPECT_LT(s.max_penetration, 0.001);
+  EXPECT_GT(s.max_in_hand_rotation_deg, 10.0);
+}
+
+TEST(SimulatorPhysics, PenIsPinchedLiftedAndRolledInTheFingers) {
+  const SimulationSummary s = Physics("pen-fingertip");
+  EXPECT_GT(s.held_fraction, 0.95);
+  EXPECT_GT(s.lift_height, 0.06);
+  EXPECT_LT(s.max_penetration, 0.001);
+  EXPECT_GT(s.max_in_hand_rotation_deg, 10.0);
 }
 
 TEST(SimulatorPhysics, ShampooIsHeldAndLifted) {
