@@ -1,5 +1,6 @@
 #include "inhand/app/pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -59,6 +60,8 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
     TagDetectorParams p;
     p.family = models_.object.tags.front().family;
     tag_detector_ = std::make_unique<TagDetector>(p);
+    p.decimate = 1.0;
+    tag_detector_fine_ = std::make_unique<TagDetector>(p);
   }
 }
 
@@ -114,7 +117,7 @@ void Pipeline::Step(int k) {
     if (!tag_detector_) continue;
     const Intrinsics& K = *info.camera;
     const auto start = std::chrono::steady_clock::now();
-    state_.tags = tag_detector_->Detect(state_.image);
+    DetectTags(frames[static_cast<std::size_t>(f)].T_PC, K);
     state_.features.clear();
     for (const TagDetection& d : state_.tags)
       for (const TagPlacement& tag : models_.object.tags) {
@@ -149,6 +152,39 @@ void Pipeline::Step(int k) {
       const Mat6 P = filters_[i]->covariance().topLeftCorner<6, 6>();
       r.nees = e.dot(P.ldlt().solve(e));
     }
+  }
+}
+
+// Tags of the whole frame at the detector's decimation (fast, but it loses tags under ~30 px
+// wide, as a tag on an object in the hand often is); then each of the object's tags that the
+// first tag set's estimate puts in view, facing the camera, and that was not found, is searched
+// at full resolution in its expected box, widened by its size (at least 40 px) for the
+// estimate's error.
+void Pipeline::DetectTags(const Transform& T_PC, const Intrinsics& K) {
+  state_.tags = tag_detector_->Detect(state_.image);
+  std::size_t set = 0;
+  while (set < sets_.size() && !sets_[set].tags) ++set;
+  if (set == sets_.size()) return;
+  const Transform T_CO = T_PC.inverse() * filters_[set]->T_PO();
+  for (const TagPlacement& tag : models_.object.tags) {
+    const bool found = std::any_of(state_.tags.begin(), state_.tags.end(),
+                                   [&](const TagDetection& d) { return d.id == tag.id && d.family == tag.family; });
+    if (found || tag.family != tag_detector_fine_->params().family) continue;
+    const Transform T_CT = T_CO * tag.T_OT;
+    if (T_CT.translation().z() <= 0.0 || T_CT.linear().col(2).dot(T_CT.translation()) >= 0.0) continue;  // behind, or seen from the back
+    Eigen::AlignedBox2d box;
+    bool in_front = true;
+    for (const Vec3& c : tag.CornersO()) {
+      const Vec3 X = T_CO * c;
+      in_front = in_front && X.z() > 1e-3;
+      if (in_front) box.extend(K.Project(X));
+    }
+    if (!in_front) continue;
+    const double margin = std::max(40.0, box.sizes().maxCoeff());
+    const PixelRect region{static_cast<int>(std::floor(box.min().x() - margin)), static_cast<int>(std::floor(box.min().y() - margin)),
+                           static_cast<int>(std::ceil(box.max().x() + margin)), static_cast<int>(std::ceil(box.max().y() + margin))};
+    for (const TagDetection& d : tag_detector_fine_->Detect(state_.image, region))
+      if (d.id == tag.id) state_.tags.push_back(d);
   }
 }
 

@@ -144,18 +144,28 @@ TagDetector::~TagDetector() {
 }
 
 std::vector<TagDetection> TagDetector::Detect(const Image8& image) {
+  return Detect(image, PixelRect{0, 0, image.width, image.height});
+}
+
+std::vector<TagDetection> TagDetector::Detect(const Image8& image, const PixelRect& region) {
   Impl& d = *impl_;
   INHAND_CHECK(image.channels == 1 || image.channels == 3, "tag detection needs a grey or RGB image");
-  d.grey.resize(std::size_t(image.width) * image.height);
-  for (std::size_t i = 0; i < d.grey.size(); ++i) {
+  const PixelRect r{std::max(region.x0, 0), std::max(region.y0, 0), std::min(region.x1, image.width),
+                    std::min(region.y1, image.height)};
+  if (r.empty()) return {};
+  const int w = r.x1 - r.x0, h = r.y1 - r.y0;
+  d.grey.resize(std::size_t(w) * h);
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* row = image.pixel(r.x0, r.y0 + y);
+    std::uint8_t* out = &d.grey[std::size_t(y) * w];
     if (image.channels == 1) {
-      d.grey[i] = image.data[i];
+      std::copy_n(row, w, out);
     } else {
-      const std::uint8_t* p = &image.data[3 * i];
-      d.grey[i] = static_cast<std::uint8_t>((299 * p[0] + 587 * p[1] + 114 * p[2] + 500) / 1000);
+      for (int x = 0; x < w; ++x, row += 3)
+        out[x] = static_cast<std::uint8_t>((299 * row[0] + 587 * row[1] + 114 * row[2] + 500) / 1000);
     }
   }
-  image_u8_t im{image.width, image.height, image.width, d.grey.data()};
+  image_u8_t im{w, h, w, d.grey.data()};
   zarray_t* found = apriltag_detector_detect(d.detector, &im);
   std::vector<TagDetection> out;
   for (int i = 0; i < zarray_size(found); ++i) {
@@ -168,8 +178,9 @@ std::vector<TagDetection> TagDetector::Detect(const Image8& image) {
     t.hamming = det->hamming;
     t.decision_margin = det->decision_margin;
     // libapriltag's coordinates put pixel centres at +0.5; the estimator's at integers.
-    for (int k = 0; k < 4; ++k) t.corners[static_cast<std::size_t>(k)] = Vec2(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
-    t.center = Vec2(det->c[0] - 0.5, det->c[1] - 0.5);
+    const Vec2 offset(r.x0 - 0.5, r.y0 - 0.5);
+    for (int k = 0; k < 4; ++k) t.corners[static_cast<std::size_t>(k)] = Vec2(det->p[k][0], det->p[k][1]) + offset;
+    t.center = Vec2(det->c[0], det->c[1]) + offset;
     out.push_back(t);
   }
   apriltag_detections_destroy(found);

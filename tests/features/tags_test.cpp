@@ -103,6 +103,45 @@ TEST(Tags, RenderedTagCornersMatchTheProjection) {
   EXPECT_EQ(checked, 16);
 }
 
+// A small tag (about 25 px wide, as on an object in the hand): a search of a region around it
+// gives the same corners as the whole frame at the same resolution, in the whole image's pixel
+// coordinates; a region without it finds nothing; regions beyond the border are clipped.
+TEST(Tags, RegionSearchAgreesWithTheWholeFrame) {
+  Renderer renderer;
+  TagPlacement tag;
+  tag.id = 7;
+  tag.size = 0.018;
+  const int mesh = renderer.AddMesh(MakeTagMesh(tag));
+  Intrinsics K;
+  K.width = 640;
+  K.height = 480;
+  K.fx = K.fy = 580.0;
+  const Transform T_PT = MakeTransform(Vec3(0.09, -0.05, 0.42), ExpSO3(Vec3(M_PI + 0.4, 0.2, 0.3)));
+  Scene scene;
+  scene.K = K;
+  scene.background = Vec3(0.5, 0.5, 0.5);
+  scene.items.push_back({mesh, T_PT, 1, std::nullopt, 1.0, true});
+  RenderOutput out;
+  renderer.Render(scene, out, false);
+  TagDetectorParams full_resolution;
+  full_resolution.decimate = 1.0;
+  TagDetector detector(full_resolution);
+  const std::vector<TagDetection> whole = detector.Detect(out.colour);
+  ASSERT_EQ(whole.size(), 1u);
+  const Vec2 c = whole[0].center;
+  const std::vector<TagDetection> region = detector.Detect(out.colour, PixelRect{int(c.x()) - 40, int(c.y()) - 40, int(c.x()) + 40, int(c.y()) + 40});
+  ASSERT_EQ(region.size(), 1u);
+  EXPECT_EQ(region[0].id, 7);
+  const auto corners = tag.CornersO();
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_LT((region[0].corners[k] - whole[0].corners[k]).norm(), 1e-3) << k;  // libapriltag computes in float
+    EXPECT_LT((region[0].corners[k] - K.Project(T_PT * corners[k])).norm(), 0.35) << k;
+  }
+  EXPECT_TRUE(detector.Detect(out.colour, PixelRect{0, 0, 100, 100}).empty());
+  EXPECT_EQ(detector.Detect(out.colour, PixelRect{-500, -500, 5000, 5000}).size(), 1u);
+  EXPECT_TRUE(detector.Detect(out.colour, PixelRect{700, 10, 800, 50}).empty());
+}
+
 TEST(Tags, BadParametersAndIds) {
   TagDetectorParams p;
   p.family = "tag99h1";

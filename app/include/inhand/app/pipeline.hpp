@@ -114,12 +114,14 @@ class Pipeline {
   std::vector<std::unique_ptr<BulletContactQuery>> queries_;
   std::vector<std::unique_ptr<Filter>> filters_;
   StepState state_;
-  std::unique_ptr<TagDetector> tag_detector_;
+  std::unique_ptr<TagDetector> tag_detector_;       // the whole frame, decimated
+  std::unique_ptr<TagDetector> tag_detector_fine_;  // full resolution, around an expected tag
   std::unique_ptr<Renderer> renderer_;
   HandMeshes hand_meshes_;
   std::vector<int> object_meshes_;
   FeatureParams feature_params_;
   void FeatureUpdate(std::size_t set, int frame);
+  void DetectTags(const Transform& T_PC, const Intrinsics& K);
 };
 
 // The annotated pictures of one camera frame: camera image with overlays | virtual view at the

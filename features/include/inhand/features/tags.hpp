@@ -36,6 +36,12 @@ struct TagDetectorParams {
   void Validate() const;
 };
 
+// A rectangle of pixels: columns [x0, x1), rows [y0, y1).
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+};
+
 class TagDetector {
  public:
   explicit TagDetector(const TagDetectorParams& params = {});
@@ -44,6 +50,9 @@ class TagDetector {
   TagDetector& operator=(const TagDetector&) = delete;
   // RGB or grey image; detections sorted by id, then by centre.
   std::vector<TagDetection> Detect(const Image8& image);
+  // Only within `region` (clipped to the image; corners in the whole image's coordinates): a
+  // search around where a tag is expected, affordable at full resolution.
+  std::vector<TagDetection> Detect(const Image8& image, const PixelRect& region);
   const TagDetectorParams& params() const { return params_; }
 
  private:
