@@ -360,7 +360,7 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::Separator();
   ImGui::Text("Filter parameters");
   float sigma_mm = static_cast<float>(state.params.contact_sigma * 1000);
-  if (ImGui::SliderFloat("contact sigma [mm]", &sigma_mm, 0.1f, 5.0f)) state.params.contact_sigma = sigma_mm / 1000.0;
+  if (ImGui::SliderFloat("contact sigma [mm]", &sigma_mm, 0.1f, 20.0f)) state.params.contact_sigma = sigma_mm / 1000.0;
   float force = static_cast<float>(state.params.force_min);
   if (ImGui::SliderFloat("force min [N]", &force, 0.0f, 10.0f)) state.params.force_min = force;
   float cone = static_cast<float>(state.params.friction_cone_deg);

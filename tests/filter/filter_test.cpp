@@ -70,6 +70,7 @@ struct FingerScene {
 TEST(Filter, PenetratingObjectIsPushedOutAlongTheNormal) {
   FingerScene s;
   FilterParams params;
+  params.contact_sigma = 0.001;  // the paper's "perfect" measurement: one update removes it all
   Filter filter(s.hand, s.query, params, false);
   // The ball's centre 25 mm above the distal link's axis: 5 mm penetration, normal +z.
   const Transform T0 = At(Vec3(0, 0.07, 0.025));
@@ -87,7 +88,9 @@ TEST(Filter, PenetratingObjectIsPushedOutAlongTheNormal) {
 
 TEST(Filter, TorqueConfirmedContactPullsTheObjectIntoTouch) {
   FingerScene s;
-  Filter filter(s.hand, s.query, FilterParams(), true);
+  FilterParams params;
+  params.contact_sigma = 0.001;  // the paper's "perfect" measurement: one update closes the gap
+  Filter filter(s.hand, s.query, params, true);
   // 3 mm above the distal link's far end, out of the proximal link's candidate range.
   const Transform T0 = At(Vec3(0, 0.085, 0.033));
   filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
@@ -141,7 +144,9 @@ TEST(Filter, JointBiasConvergesWhenAContactConstrainsIt) {
   ASSERT_NEAR(s.Distance(q_true, T_PO), 0.0, 1e-9);
   const Eigen::Vector2d tau = s.Torque(q_true, c_f, 5.0 * n);
 
-  Filter filter(s.hand, s.query, FilterParams(), true);
+  FilterParams params;
+  params.contact_sigma = 0.001;  // the rate below is for the paper's 1 mm
+  Filter filter(s.hand, s.query, params, true);
   // The object pose is known; j1 is accurate, j2's bias is uncertain (5°).
   filter.Reset(T_PO, s.q0, 1e-6, 1e-6, Eigen::Vector2d(1e-9, 5.0 * M_PI / 180));
   const double sigma0 = std::sqrt(filter.covariance()(7, 7));
