@@ -86,6 +86,15 @@ TriangleMesh MakeTagMesh(const TagPlacement& tag) {
   return m;
 }
 
+std::vector<TriangleMesh> PrintedTagMeshes(const ObjectModel& object) {
+  std::vector<TriangleMesh> out;
+  for (const TagPlacement& tag : object.tags) {
+    out.push_back(MakeTagMesh(tag));
+    out.back().Apply(tag.T_OT * MakeTransform(Vec3(0, 0, 0.0002), Mat3::Identity()));
+  }
+  return out;
+}
+
 Image8 ReadGreyImage(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
   std::string ext = std::filesystem::path(path).extension().string();

@@ -221,12 +221,12 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   std::unique_ptr<Renderer> renderer;
   Scene world_scene;
   HandMeshes hand_meshes;
-  std::vector<int> object_meshes, tag_meshes;
+  std::vector<int> object_meshes;
   if (opt.images) {
     renderer = std::make_unique<Renderer>();
     hand_meshes = UploadHand(*renderer, hand);
     object_meshes = UploadObject(*renderer, object);
-    for (const TagPlacement& tag : object.tags) tag_meshes.push_back(renderer->AddMesh(MakeTagMesh(tag)));
+    for (const TriangleMesh& tag : PrintedTagMeshes(object)) object_meshes.push_back(renderer->AddMesh(tag));
     std::mt19937 clutter_rng(12345);  // the same room for every seed
     world_scene.K = K;
     world_scene.T_PC = T_WC;
@@ -397,14 +397,6 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       Scene scene = world_scene;
       AddHand(scene, hand_meshes, T_WL);
       AddObject(scene, object_meshes, T_WO);
-      for (std::size_t i = 0; i < object.tags.size(); ++i) {
-        SceneItem item;
-        item.mesh = tag_meshes[i];
-        // 0.2 mm off the surface: no z-fighting with the object.
-        item.T_PM = T_WO * object.tags[i].T_OT * MakeTransform(Vec3(0, 0, 0.0002), Mat3::Identity());
-        item.label = kObjectLabel;
-        scene.items.push_back(item);
-      }
       RenderOutput out;
       renderer->Render(scene, out, false);
       cv::Mat img(K.height, K.width, CV_8UC3, out.colour.data.data());

@@ -187,10 +187,12 @@ TEST(Cli, ReplayIsDeterministic) {
 
 // Issue 6: fingers around a bottle leave its axis unobservable (position along it, rotation
 // about it); the paper-noise session starts 20 mm off, mostly along that axis, and the bottle
-// slips in the hand. AprilTags must recover both, which joints alone cannot.
+// slips in the hand. AprilTags must recover both, which joints alone cannot. (The joints'
+// error along the axis wanders with the seed; the first assertion checks that this seed's
+// leaves it large, or the test would prove nothing.)
 TEST(Cli, TagsRecoverWhatTheFingersLeaveUnobservable) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 3 --out " + (dir / "session")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 1 --out " + (dir / "session")).exit_code, 0);
   const test::CommandResult r = test::RunInhand("replay " + (dir / "session") + " --modalities j,jta --no-video --out " + (dir / "replay"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(dir / "replay/summary.json");

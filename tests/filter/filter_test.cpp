@@ -301,6 +301,23 @@ TEST(FilterJacobians, TwistFromContactsIncludingDegenerateCases) {
   }
 }
 
+// Nearly collinear contacts (one 0.2 mm off the line, as pinching fingertips are): the rotation
+// about that line is barely determined, and undamped, 20 µm of measurement noise turns into
+// degrees of rotation in one step. The default damping keeps the step a translation.
+TEST(FilterJacobians, DefaultTwistDampingKeepsNoiseOutOfIllConditionedRotations) {
+  const Vec3 p(0.0, 0.05, 0.04);
+  const Vec3 shift(0.0, 0.0, 0.001);  // the fingers move the object 1 mm
+  const std::vector<Vec3> contacts{Vec3(-0.02, 0.05, 0.04), Vec3(0.0, 0.05, 0.0402), Vec3(0.02, 0.05, 0.04)};
+  const std::vector<Vec3> noise{Vec3(2e-5, -1e-5, 2e-5), Vec3(-1e-5, 2e-5, -2e-5), Vec3(1e-5, 1e-5, 2e-5)};
+  TwistSolver solver;
+  for (std::size_t i = 0; i < contacts.size(); ++i) solver.Add(GraspMapBlock(contacts[i], p), shift + noise[i]);
+  const Vec6 undamped = solver.Solve(1e-8);
+  const Vec6 damped = solver.Solve(FilterParams().twist_damping);
+  EXPECT_GT(undamped.tail<3>().norm(), 2.0 * M_PI / 180);
+  EXPECT_LT(damped.tail<3>().norm(), 0.3 * M_PI / 180);
+  EXPECT_LT((damped.head<3>() - shift).norm(), 0.2 * shift.norm());
+}
+
 TEST(FilterJacobians, ContactMeasurementJacobianMatchesFiniteDifferences) {
   const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
   const int m = hand.num_q(), n = 6 + m;

@@ -69,5 +69,8 @@ Image8 ReadGreyImage(const std::string& path);
 // The tag's bitmap (white border included) as a textured quad in the tag frame (z = 0, facing
 // +z), for rendering tags on objects. Throws InputError for an unknown family or id.
 TriangleMesh MakeTagMesh(const TagPlacement& tag);
+// The object's tags as printed on it, for rendering its appearance: each tag's quad moved into
+// the object frame, 0.2 mm off the surface (no z-fighting with it).
+std::vector<TriangleMesh> PrintedTagMeshes(const ObjectModel& object);
 
 }  // namespace inhand

@@ -38,7 +38,12 @@ struct FilterParams {
                                               // so torques are explained by touching links first
                                               // (beyond the paper); 0: the paper's (J_cᵀ)⁺
   // --- prediction
-  double twist_damping = 1e-8;                // damping of the grasp-map pseudo-inverse
+  double twist_damping = 3e-3;                // damping of the grasp-map pseudo-inverse,
+                                              // relative to the mean eigenvalue of its normal
+                                              // matrix: with nearly collinear contacts the
+                                              // undamped (1e-8) solve turned joint noise into
+                                              // 1 deg per step and once a 65 deg jump in one step
+                                              // (evaluation in issue 7's note)
   double process_position = 0.002;            // [m/√s] random walk of the object position
   double process_orientation = 0.02;          // [rad/√s] random walk of the object orientation
   double process_bias = 0.0;                  // [rad/√s] random walk of the joint biases
