@@ -27,9 +27,12 @@ struct FilterParams {
   double prediction_contact_distance = 0.001; // [m] pairs this close (or penetrating) move the
                                               // object with the fingers in Predict
   // --- torque contacts (paper Sec. III-B)
-  double torque_candidate_distance = 0.006;   // [m] closest pairs within this distance are
+  double torque_candidate_distance = 0.003;   // [m] closest pairs within this distance are
                                               // candidates; at 15 mm torques pulled far links
-                                              // onto the object (evaluation in issue 7's note)
+                                              // onto the object; 3 mm was best of 2-10 mm with
+                                              // the damped twist and 10 mm contact σ, the only
+                                              // value with j >= jt on every scenario
+                                              // (evaluation in issue 7's note)
   double friction_cone_deg = 45.0;            // [deg] half-angle around the inward normal
   double force_min = 2.0;                     // [N] smaller estimated forces are ignored
   double torque_damping = 1e-6;               // [m²] damping of (J_cᵀ)⁺
