@@ -60,13 +60,17 @@ EdgeData Edges(const Image8& im, const FeatureParams& p) {
   cv::Mat gx, gy;
   cv::Sobel(g, gx, CV_32F, 1, 0, 3);
   cv::Sobel(g, gy, CV_32F, 0, 1, 3);
-  e.orientation = cv::Mat(g.size(), CV_8U);
-  for (int y = 0; y < g.rows; ++y)
+  // Orientation only where it is read: on edge pixels (0 elsewhere).
+  e.orientation = cv::Mat::zeros(g.size(), CV_8U);
+  for (int y = 0; y < g.rows; ++y) {
+    const std::uint8_t* edge = e.edges.ptr<std::uint8_t>(y);
     for (int x = 0; x < g.cols; ++x) {
+      if (!edge[x]) continue;
       double a = std::atan2(gy.at<float>(y, x), gx.at<float>(y, x));
       if (a < 0) a += M_PI;  // mod π: edges have no sign (light/dark may differ between images)
       e.orientation.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(std::min(p.orientation_bins - 1, static_cast<int>(a / M_PI * p.orientation_bins)));
     }
+  }
   return e;
 }
 
@@ -150,6 +154,7 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
   dbg.votes.resize(dbg.virtual_corners.size());
   const int A = 2 * S + 1;
   std::vector<int> acc(static_cast<std::size_t>(A * A));
+  std::vector<std::vector<PieceEdge>> real_by_bin(static_cast<std::size_t>(p.orientation_bins));
   for (std::size_t i = 0; i < dbg.virtual_corners.size(); ++i) {
     if (static_cast<int>(pieces[i].size()) < p.min_piece_pixels) {
       dbg.piece_rejected.push_back(static_cast<int>(i));
@@ -157,21 +162,26 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     }
     const int cx = static_cast<int>(dbg.virtual_corners[i].x()), cy = static_cast<int>(dbg.virtual_corners[i].y());
     std::fill(acc.begin(), acc.end(), 0);
-    for (const PieceEdge& e : pieces[i]) {
-      for (int sy = -S; sy <= S; ++sy) {
-        const int y = cy + e.dy + sy;
-        if (y < 0 || y >= H) continue;
-        const std::uint8_t* row = re.edges.ptr<std::uint8_t>(y);
-        const std::uint8_t* orow = re.orientation.ptr<std::uint8_t>(y);
-        for (int sx = -S; sx <= S; ++sx) {
-          const int x = cx + e.dx + sx;
-          if (x < 0 || x >= W || !row[x]) continue;
-          const int d = std::abs(orow[x] - e.bin);
-          if (std::min(d, p.orientation_bins - d) > 1) continue;  // orientation must agree (±1 bin)
+    // The real edge pixels any piece pixel can reach (within R + S of the corner), listed once
+    // per corner by orientation bin: each vote pairs one of them with a piece pixel of an
+    // agreeing orientation (±1 bin) whose shift lies in the search window.
+    for (auto& list : real_by_bin) list.clear();
+    for (int y = std::max(0, cy - R - S); y <= std::min(H - 1, cy + R + S); ++y) {
+      const std::uint8_t* row = re.edges.ptr<std::uint8_t>(y);
+      const std::uint8_t* orow = re.orientation.ptr<std::uint8_t>(y);
+      for (int x = std::max(0, cx - R - S); x <= std::min(W - 1, cx + R + S); ++x)
+        if (row[x]) real_by_bin[orow[x]].push_back({x - cx, y - cy, 0});
+    }
+    for (const PieceEdge& e : pieces[i])
+      for (int db = -1; db <= 1; ++db) {
+        const int bin = (e.bin + db + p.orientation_bins) % p.orientation_bins;
+        if (db != 0 && (bin == e.bin || (db == 1 && bin == (e.bin - 1 + p.orientation_bins) % p.orientation_bins))) continue;  // few bins: count each once
+        for (const PieceEdge& r : real_by_bin[static_cast<std::size_t>(bin)]) {
+          const int sx = r.dx - e.dx, sy = r.dy - e.dy;
+          if (sx < -S || sx > S || sy < -S || sy > S) continue;
           ++acc[static_cast<std::size_t>((sy + S) * A + (sx + S))];
         }
       }
-    }
     // Peak (ties broken towards the smallest shift: deterministic), refined by a 3x3 centroid.
     int best = -1, bx = 0, by = 0;
     for (int sy = -S; sy <= S; ++sy)
