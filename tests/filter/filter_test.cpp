@@ -107,6 +107,41 @@ TEST(Filter, TorqueConfirmedContactPullsTheObjectIntoTouch) {
   EXPECT_LT(filter.position().z(), T0.translation().z() - 0.0018);
 }
 
+// A grip that weakens after the object was held may let it slip: the random walk of the pose
+// grows by slip_scale² in variance while Σ|τ| is below slip_torque, and only then; before the
+// first firm grip (the object untouched) it does not.
+TEST(Filter, AWeakenedGripGrowsTheRandomWalk) {
+  FingerScene s;
+  FilterParams params;
+  params.slip_torque = 2.0;
+  params.slip_scale = 30.0;
+  Filter filter(s.hand, s.query, params, true);
+  const Transform T0 = At(Vec3(0, 0.085, 0.06));  // out of reach: no contacts
+  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  const double dt = 0.002;
+  const auto growth = [&](const Eigen::Vector2d& tau) {
+    filter.UpdateContacts(tau);
+    const double before = filter.covariance()(0, 0);
+    filter.Predict(s.q0, dt);
+    return filter.covariance()(0, 0) - before;
+  };
+  const double walk = params.process_position * params.process_position * dt;
+  EXPECT_NEAR(growth(Eigen::Vector2d(0.1, 0.1)), walk, 1e-12);  // never held yet
+  EXPECT_FALSE(filter.trace().slipping);
+  EXPECT_NEAR(growth(Eigen::Vector2d(1.5, -1.0)), walk, 1e-12);  // held: Σ|τ| = 2.5 N m
+  EXPECT_FALSE(filter.trace().slipping);
+  EXPECT_NEAR(growth(Eigen::Vector2d(0.1, 0.1)), 900.0 * walk, 1e-10);  // let go
+  EXPECT_TRUE(filter.trace().slipping);
+  params.slip_torque = 0.0;  // disabled
+  Filter off(s.hand, s.query, params, true);
+  off.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  off.UpdateContacts(Eigen::Vector2d(1.5, -1.0));
+  off.Predict(s.q0, dt);
+  off.UpdateContacts(Eigen::Vector2d(0.1, 0.1));
+  off.Predict(s.q0, dt);
+  EXPECT_FALSE(off.trace().slipping);
+}
+
 TEST(Filter, ForcesOutsideTheConeOrBelowThresholdAreRejected) {
   FingerScene s;
   const Transform T0 = At(Vec3(0, 0.085, 0.032));

@@ -25,6 +25,7 @@ void FilterTrace::Clear() {
   num_constraints = 0;
   num_gated = 0;
   numeric_events = 0;
+  slipping = false;
 }
 
 Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams& params, bool use_torque)
@@ -76,6 +77,7 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
   kin_.Update(hand_, q_eff_);
   active_.clear();
   trace_.Clear();
+  grip_ = max_grip_ = 0.0;
 }
 
 Transform Filter::T_PO() const { return MakeTransform(p_, R_); }
@@ -105,9 +107,14 @@ void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt)
   // Process noise: a random walk plus a share of the predicted motion (rolling and slipping
   // are not modelled). F = I to first order, as in the paper.
   const double dtp = std::max(dt, 0.0);
-  const double sp = params_.process_position * params_.process_position * dtp +
+  // Only once the object has been held: before the grasp nothing holds it, but nothing moves it.
+  const bool slipping = use_torque_ && params_.slip_torque > 0.0 && max_grip_ >= params_.slip_torque &&
+                        grip_ < params_.slip_torque;
+  const double walk = slipping ? params_.slip_scale * params_.slip_scale : 1.0;
+  trace_.slipping = slipping;
+  const double sp = walk * params_.process_position * params_.process_position * dtp +
                     std::pow(params_.motion_position * nu.head<3>().norm(), 2);
-  const double so = params_.process_orientation * params_.process_orientation * dtp +
+  const double so = walk * params_.process_orientation * params_.process_orientation * dtp +
                     std::pow(params_.motion_orientation * nu.tail<3>().norm(), 2);
   P_.diagonal().head<3>().array() += sp;
   P_.diagonal().segment<3>(3).array() += so;
@@ -253,6 +260,10 @@ void Filter::UpdateContacts(const Eigen::Ref<const Eigen::VectorXd>& tau) {
     Commit();
     if (trace_.num_constraints == before) break;  // nothing left to resolve
   }
+  // The grip, from the torques alone (not from contacts at the estimate, which vanish when the
+  // estimate drifts away and would then feed the drift).
+  grip_ = tau.cwiseAbs().sum();
+  max_grip_ = std::max(max_grip_, grip_);
   q_eff_ = q_prev_ + b_;
   kin_.Update(hand_, q_eff_);
 }

@@ -42,6 +42,8 @@ const std::vector<Field>& Fields() {
       {"process_bias", &FilterParams::process_bias, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10] rad/sqrt(s)"},
       {"motion_position", &FilterParams::motion_position, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10]"},
       {"motion_orientation", &FilterParams::motion_orientation, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10]"},
+      {"slip_torque", &FilterParams::slip_torque, nullptr, nullptr, 0.0, 1e4, false, "in [0, 1e4] N m (0 disables)"},
+      {"slip_scale", &FilterParams::slip_scale, nullptr, nullptr, 1.0, 1e4, false, "in [1, 1e4]"},
       {"pixel_sigma", &FilterParams::pixel_sigma, nullptr, nullptr, 0.0, 1000.0, true, "in (0, 1000] px"},
       {"visual_gate_chi2", &FilterParams::visual_gate_chi2, nullptr, nullptr, 0.0, 1e9, false, ">= 0 (0 disables)"},
   };

@@ -56,6 +56,7 @@ struct FilterTrace {
   int num_constraints = 0;          // contact blocks applied
   int num_gated = 0;                // blocks rejected by a gate
   int numeric_events = 0;           // ill-conditioned S, non-finite residuals (skipped)
+  bool slipping = false;            // Predict grew the random walk: the grip was too weak
   void Clear();
 };
 
@@ -126,6 +127,8 @@ class Filter {
   Eigen::VectorXd delta_;  // accumulated, not yet applied correction
   Eigen::VectorXd q_prev_, q_eff_;
   bool have_prev_ = false;
+  double grip_ = 0.0;      // [N m] Σ|τ| of the last contact update
+  double max_grip_ = 0.0;  // [N m] its largest value since Reset
 
   KinematicsData kin_;
   std::vector<ContactPair> pairs_;

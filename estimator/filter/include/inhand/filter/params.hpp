@@ -52,6 +52,16 @@ struct FilterParams {
   double process_bias = 0.0;                  // [rad/√s] random walk of the joint biases
   double motion_position = 0.2;               // σ added per metre of predicted translation [1]
   double motion_orientation = 0.2;            // σ added per radian of predicted rotation [1]
+  double slip_torque = 2.0;                   // [N m] with torques: once the hand has gripped
+                                              // this hard (Σ|τ| over the joints), a grip below it
+                                              // may let the object slip, which the no-slip
+                                              // prediction cannot follow: the random walk grows
+                                              // by slip_scale (beyond the paper; the ketchup
+                                              // bottle turns 17 deg in a loosened grip). From the
+                                              // torques alone, not from contacts at the estimate,
+                                              // which vanish as it drifts. 0.5-4 evaluated;
+                                              // 0 disables
+  double slip_scale = 30.0;                   // [1] factor on the random walk's σ while slipping
   // --- visual features (paper Sec. III-C)
   double pixel_sigma = 4.0;                   // [px] σ of a feature's pixel: detection noise
                                               // and the camera pose's error (0.5 deg of hand-eye
