@@ -66,6 +66,28 @@ TEST(Tags, UpstreamPhotographsGiveTheExpectedCorners) {
   EXPECT_GE(matched, 23);  // of 25
 }
 
+// A 640x480 camera with focal length f [px].
+Intrinsics Camera640(double f) {
+  Intrinsics K;
+  K.width = 640;
+  K.height = 480;
+  K.fx = K.fy = f;
+  K.cx = 319.5;
+  K.cy = 239.5;
+  return K;
+}
+
+// One tag (mesh) at T_PT on grey, seen by K.
+Image8 RenderTag(Renderer& renderer, int mesh, const Intrinsics& K, const Transform& T_PT) {
+  Scene scene;
+  scene.K = K;
+  scene.background = Vec3(0.5, 0.5, 0.5);
+  scene.items.push_back({mesh, T_PT, 1, std::nullopt, 1.0, true});
+  RenderOutput out;
+  renderer.Render(scene, out, false);
+  return out.colour;
+}
+
 // A tag rendered with the estimator's projection is detected where the projection puts it:
 // this pins the pixel convention (pixel centres at integers) end to end.
 TEST(Tags, RenderedTagCornersMatchTheProjection) {
@@ -74,23 +96,12 @@ TEST(Tags, RenderedTagCornersMatchTheProjection) {
   tag.id = 42;
   tag.size = 0.04;
   const int mesh = renderer.AddMesh(MakeTagMesh(tag));
-  Intrinsics K;
-  K.width = 640;
-  K.height = 480;
-  K.fx = K.fy = 600.0;
-  K.cx = 319.5;
-  K.cy = 239.5;
+  const Intrinsics K = Camera640(600.0);
   TagDetector detector;  // default: decimate 2, edge refinement on
   int checked = 0;
   for (int trial = 0; trial < 4; ++trial) {
     const Transform T_PT = MakeTransform(Vec3(0.01 * trial - 0.015, 0.005 * trial, 0.3 + 0.03 * trial), ExpSO3(Vec3(M_PI + 0.3 - 0.15 * trial, 0.25, 0.2 * trial)));
-    Scene scene;
-    scene.K = K;
-    scene.background = Vec3(0.5, 0.5, 0.5);
-    scene.items.push_back({mesh, T_PT, 1, std::nullopt, 1.0, true});
-    RenderOutput out;
-    renderer.Render(scene, out, false);
-    const std::vector<TagDetection> found = detector.Detect(out.colour);
+    const std::vector<TagDetection> found = detector.Detect(RenderTag(renderer, mesh, K, T_PT));
     ASSERT_EQ(found.size(), 1u) << "trial " << trial;
     EXPECT_EQ(found[0].id, 42);
     const auto corners = tag.CornersO();
@@ -112,24 +123,16 @@ TEST(Tags, RegionSearchAgreesWithTheWholeFrame) {
   tag.id = 7;
   tag.size = 0.018;
   const int mesh = renderer.AddMesh(MakeTagMesh(tag));
-  Intrinsics K;
-  K.width = 640;
-  K.height = 480;
-  K.fx = K.fy = 580.0;
+  const Intrinsics K = Camera640(580.0);
   const Transform T_PT = MakeTransform(Vec3(0.09, -0.05, 0.42), ExpSO3(Vec3(M_PI + 0.4, 0.2, 0.3)));
-  Scene scene;
-  scene.K = K;
-  scene.background = Vec3(0.5, 0.5, 0.5);
-  scene.items.push_back({mesh, T_PT, 1, std::nullopt, 1.0, true});
-  RenderOutput out;
-  renderer.Render(scene, out, false);
+  const Image8 image = RenderTag(renderer, mesh, K, T_PT);
   TagDetectorParams full_resolution;
   full_resolution.decimate = 1.0;
   TagDetector detector(full_resolution);
-  const std::vector<TagDetection> whole = detector.Detect(out.colour);
+  const std::vector<TagDetection> whole = detector.Detect(image);
   ASSERT_EQ(whole.size(), 1u);
   const Vec2 c = whole[0].center;
-  const std::vector<TagDetection> region = detector.Detect(out.colour, PixelRect{int(c.x()) - 40, int(c.y()) - 40, int(c.x()) + 40, int(c.y()) + 40});
+  const std::vector<TagDetection> region = detector.Detect(image, PixelRect{int(c.x()) - 40, int(c.y()) - 40, int(c.x()) + 40, int(c.y()) + 40});
   ASSERT_EQ(region.size(), 1u);
   EXPECT_EQ(region[0].id, 7);
   const auto corners = tag.CornersO();
@@ -137,9 +140,9 @@ TEST(Tags, RegionSearchAgreesWithTheWholeFrame) {
     EXPECT_LT((region[0].corners[k] - whole[0].corners[k]).norm(), 1e-3) << k;  // libapriltag computes in float
     EXPECT_LT((region[0].corners[k] - K.Project(T_PT * corners[k])).norm(), 0.35) << k;
   }
-  EXPECT_TRUE(detector.Detect(out.colour, PixelRect{0, 0, 100, 100}).empty());
-  EXPECT_EQ(detector.Detect(out.colour, PixelRect{-500, -500, 5000, 5000}).size(), 1u);
-  EXPECT_TRUE(detector.Detect(out.colour, PixelRect{700, 10, 800, 50}).empty());
+  EXPECT_TRUE(detector.Detect(image, PixelRect{0, 0, 100, 100}).empty());
+  EXPECT_EQ(detector.Detect(image, PixelRect{-500, -500, 5000, 5000}).size(), 1u);
+  EXPECT_TRUE(detector.Detect(image, PixelRect{700, 10, 800, 50}).empty());
 }
 
 // The object's printed tags (its appearance in the virtual image): each quad lies 0.2 mm off the

@@ -124,21 +124,16 @@ TEST(SimulatorPhysics, WaterBottleIsPushedAlongTheTableThenHeld) {
 
 // The fingertip grasps: held between the index and the thumb from the moment the fingers have
 // closed, lifted off their book, and rolled in the fingers by more than 10 deg.
-TEST(SimulatorPhysics, BrushIsPinchedLiftedAndRolledInTheFingers) {
-  const SimulationSummary s = Physics("brush-rotation");
+void ExpectPinchedLiftedAndRolled(const std::string& scenario) {
+  const SimulationSummary s = Physics(scenario);
   EXPECT_GT(s.held_fraction, 0.95);
   EXPECT_GT(s.lift_height, 0.06);
   EXPECT_LT(s.max_penetration, 0.001);
   EXPECT_GT(s.max_in_hand_rotation_deg, 10.0);
 }
 
-TEST(SimulatorPhysics, PenIsPinchedLiftedAndRolledInTheFingers) {
-  const SimulationSummary s = Physics("pen-fingertip");
-  EXPECT_GT(s.held_fraction, 0.95);
-  EXPECT_GT(s.lift_height, 0.06);
-  EXPECT_LT(s.max_penetration, 0.001);
-  EXPECT_GT(s.max_in_hand_rotation_deg, 10.0);
-}
+TEST(SimulatorPhysics, BrushIsPinchedLiftedAndRolledInTheFingers) { ExpectPinchedLiftedAndRolled("brush-rotation"); }
+TEST(SimulatorPhysics, PenIsPinchedLiftedAndRolledInTheFingers) { ExpectPinchedLiftedAndRolled("pen-fingertip"); }
 
 TEST(SimulatorPhysics, ShampooIsHeldAndLifted) {
   const SimulationSummary s = Physics("shampoo-grasp");
