@@ -77,6 +77,13 @@ Intrinsics Camera640(double f) {
   return K;
 }
 
+TagPlacement Tag(int id, double size) {
+  TagPlacement tag;
+  tag.id = id;
+  tag.size = size;
+  return tag;
+}
+
 // One tag (mesh) at T_PT on grey, seen by K.
 Image8 RenderTag(Renderer& renderer, int mesh, const Intrinsics& K, const Transform& T_PT) {
   Scene scene;
@@ -92,9 +99,7 @@ Image8 RenderTag(Renderer& renderer, int mesh, const Intrinsics& K, const Transf
 // this pins the pixel convention (pixel centres at integers) end to end.
 TEST(Tags, RenderedTagCornersMatchTheProjection) {
   Renderer renderer;
-  TagPlacement tag;
-  tag.id = 42;
-  tag.size = 0.04;
+  const TagPlacement tag = Tag(42, 0.04);
   const int mesh = renderer.AddMesh(MakeTagMesh(tag));
   const Intrinsics K = Camera640(600.0);
   TagDetector detector;  // default: decimate 2, edge refinement on
@@ -119,9 +124,7 @@ TEST(Tags, RenderedTagCornersMatchTheProjection) {
 // coordinates; a region without it finds nothing; regions beyond the border are clipped.
 TEST(Tags, RegionSearchAgreesWithTheWholeFrame) {
   Renderer renderer;
-  TagPlacement tag;
-  tag.id = 7;
-  tag.size = 0.018;
+  const TagPlacement tag = Tag(7, 0.018);
   const int mesh = renderer.AddMesh(MakeTagMesh(tag));
   const Intrinsics K = Camera640(580.0);
   const Transform T_PT = MakeTransform(Vec3(0.09, -0.05, 0.42), ExpSO3(Vec3(M_PI + 0.4, 0.2, 0.3)));
