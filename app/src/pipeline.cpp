@@ -215,9 +215,12 @@ void Pipeline::FeatureUpdate(std::size_t set, int frame) {
   FeatureStep& fs = state_.feature_step;
   fs.frame = frame;
   renderer_->Render(BelievedScene(f, cf.T_PC, K, hand_meshes_, object_meshes_, Vec3(0.5, 0.5, 0.5)), fs.virtual_view, true);
-  std::vector<std::uint8_t> mask(fs.virtual_view.label.size());
-  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = fs.virtual_view.label[i] == kObjectLabel;
-  fs.match = MatchFeatures(state_.image, fs.virtual_view.colour, &mask, feature_params_);
+  std::vector<std::uint8_t> mask(fs.virtual_view.label.size()), hand(mask.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    mask[i] = fs.virtual_view.label[i] == kObjectLabel;
+    hand[i] = fs.virtual_view.label[i] >= kHandLabelBase && fs.virtual_view.label[i] < kExtraLabelBase;
+  }
+  fs.match = MatchFeatures(state_.image, fs.virtual_view.colour, &mask, feature_params_, &hand);
   // Inliers to object points through the virtual depth, moved into O with the estimate.
   const Transform T_OP = f.T_PO().inverse();
   state_.features.clear();

@@ -19,6 +19,7 @@ void FeatureParams::Validate() const {
   if (harris_block < 2 || harris_block > 31) fail("harris_block", harris_block, "in [2, 31]");
   if (!(harris_relative > 0 && harris_relative < 1)) fail("harris_relative", harris_relative, "in (0, 1)");
   if (max_corners < 1 || max_corners > 1000) fail("max_corners", max_corners, "in [1, 1000]");
+  if (occluder_clearance < 0 || occluder_clearance > 100) fail("occluder_clearance", occluder_clearance, "in [0, 100]");
   if (piece_radius < 3 || piece_radius > 100) fail("piece_radius", piece_radius, "in [3, 100]");
   if (search_radius < 1 || search_radius > 200) fail("search_radius", search_radius, "in [1, 200]");
   if (orientation_bins < 1 || orientation_bins > 64) fail("orientation_bins", orientation_bins, "in [1, 64]");
@@ -112,7 +113,7 @@ std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p, co
 }  // namespace
 
 MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const std::vector<std::uint8_t>* object_mask,
-                          const FeatureParams& p) {
+                          const FeatureParams& p, const std::vector<std::uint8_t>* occluder_mask) {
   p.Validate();
   INHAND_CHECK(real.width == virtual_image.width && real.height == virtual_image.height, "images of different sizes");
   MatchResult result;
@@ -122,10 +123,18 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
   dbg.real_edges = ToImage(re.edges);
   dbg.virtual_edges = ToImage(ve.edges);
   // The object mask, grown a little: silhouette edges lie on its border.
+  // Less the neighbourhood of occluders, whose junctions with the object are not its features.
   std::vector<std::uint8_t> grown;
   if (object_mask) {
     cv::Mat m(virtual_image.height, virtual_image.width, CV_8U, const_cast<std::uint8_t*>(object_mask->data())), g;
     cv::dilate(m, g, cv::Mat::ones(5, 5, CV_8U));
+    if (occluder_mask && p.occluder_clearance > 0) {
+      INHAND_CHECK(occluder_mask->size() == g.total(), "occluder mask of another size");
+      cv::Mat o(virtual_image.height, virtual_image.width, CV_8U, const_cast<std::uint8_t*>(occluder_mask->data())), near;
+      const int k = 2 * p.occluder_clearance + 1;
+      cv::dilate(o, near, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
+      g.setTo(0, near);
+    }
     grown.assign(g.data, g.data + g.total());
   }
   // 2. Harris on the edge images.

@@ -86,6 +86,30 @@ TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
   EXPECT_LT(rot_after, rot_before) << rot_before << " -> " << rot_after;
 }
 
+// Corners near an occluder (a finger across the object) are junctions of its edges with the
+// object's: none is kept within occluder_clearance of it; without the occluder some are.
+TEST(ExtractedFeatures, CornersNearAnOccluderAreRejected) {
+  Pair p;
+  const RenderOutput a = p.Render(Transform::Identity());
+  std::vector<std::uint8_t> mask(a.label.size()), band(a.label.size(), 0);
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = a.label[i] == kObjectLabel;
+  // The band: the object's rows between a third and two thirds of its height in the image.
+  int top = a.height, bottom = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x)
+      if (mask[std::size_t(y) * a.width + x]) top = std::min(top, y), bottom = std::max(bottom, y);
+  const int y0 = top + (bottom - top) / 3, y1 = top + 2 * (bottom - top) / 3;
+  for (int y = y0; y <= y1; ++y)
+    for (int x = 0; x < a.width; ++x) band[std::size_t(y) * a.width + x] = 255;
+  FeatureParams params;
+  const auto near_band = [&](const Vec2& c) { return c.y() >= y0 - params.occluder_clearance && c.y() <= y1 + params.occluder_clearance; };
+  const MatchResult free = MatchFeatures(a.colour, a.colour, &mask, params);
+  EXPECT_TRUE(std::any_of(free.debug.virtual_corners.begin(), free.debug.virtual_corners.end(), near_band));
+  const MatchResult occluded = MatchFeatures(a.colour, a.colour, &mask, params, &band);
+  EXPECT_FALSE(occluded.debug.virtual_corners.empty());
+  EXPECT_FALSE(std::any_of(occluded.debug.virtual_corners.begin(), occluded.debug.virtual_corners.end(), near_band));
+}
+
 TEST(ExtractedFeatures, IdenticalImagesMatchInPlaceAndBadParametersAreRejected) {
   Pair p;
   const RenderOutput a = p.Render(Transform::Identity());

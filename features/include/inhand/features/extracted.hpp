@@ -27,6 +27,10 @@ struct FeatureParams {
   double harris_relative = 0.05;     // keep responses above this share of the image's maximum
   int max_corners = 40;              // strongest virtual corners kept
   double min_corner_distance = 10.0; // [px] between kept corners
+  int occluder_clearance = 8;        // [px] virtual corners this close to an occluder (a finger)
+                                     // are junctions of its edges with the object's: they move
+                                     // with the finger, not the object (they had dragged jtf
+                                     // 30-40 mm along a smooth bottle's axis)
   int piece_radius = 14;             // [px] contour piece: edge pixels within this radius
   int min_piece_pixels = 12;         // pieces with fewer edge pixels are rejected
   int search_radius = 30;            // [px] local Hough search around the virtual corner
@@ -65,8 +69,11 @@ struct MatchResult {
 };
 
 // `object_mask` (optional, virtual image size, non-zero on the object's visible pixels) limits
-// the virtual corners to the object. Images are RGB or grey of the same size.
+// the virtual corners to the object; `occluder_mask` (optional, same size, non-zero on what
+// occludes it: the hand) rejects the corners within occluder_clearance of it. Images are RGB or
+// grey of the same size.
 MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
-                          const std::vector<std::uint8_t>* object_mask, const FeatureParams& params);
+                          const std::vector<std::uint8_t>* object_mask, const FeatureParams& params,
+                          const std::vector<std::uint8_t>* occluder_mask = nullptr);
 
 }  // namespace inhand
