@@ -63,7 +63,7 @@ TEST(Tags, UpstreamPhotographsGiveTheExpectedCorners) {
       matched += best < 0.1;
     }
   }
-  EXPECT_GE(matched, 23);  // of 25
+  EXPECT_GE(matched, 45);  // of 47 (the other two: 0.106 and 0.14 px, Debian's libapriltag 3.3.0)
 }
 
 // A 640x480 camera with focal length f [px].
