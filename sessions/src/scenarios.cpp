@@ -63,6 +63,37 @@ std::map<std::string, double> WithThumb(std::map<std::string, double> q, double 
   return With(std::move(q), "thumb", t1, t2, t3);
 }
 
+// `q` with the thumb's joints as in `from` (e.g. the fingers closed, the thumb still open).
+std::map<std::string, double> WithThumbOf(std::map<std::string, double> q, const std::map<std::string, double>& from) {
+  for (const char* j : {"thumb_abduction", "thumb_flex1", "thumb_flex2", "thumb_flex3"}) q[j] = from.at(j);
+  return q;
+}
+
+// A static box on the table.
+Scenario::Prop Box(const Vec3& centre, const Vec3& half_extents, const Eigen::Vector4d& rgba) {
+  Scenario::Prop p;
+  p.T_W = MakeTransform(centre, Mat3::Identity());
+  p.half_extents = half_extents;
+  p.rgba = rgba;
+  return p;
+}
+
+// A pinch between the index pad and the thumb tip (targets from the hand's inverse kinematics):
+// the index curled under the object, touching it (thumb above it), squeezing it, and rolled
+// both ways (the tips moved along the tangent in opposite directions).
+struct Pinch {
+  std::map<std::string, double> under, touch, pinch, roll_a, roll_b;
+};
+
+// The approach shared by the pinch scenarios: from 6 cm above to the grasp pose with the hand
+// open, the index under the object by 2.0 s, touching by 2.4 s, squeezing from 2.9 s to 3.1 s.
+std::vector<Keyframe> PinchApproach(const Transform& grasp, const std::map<std::string, double>& open, const Pinch& p,
+                                    double grip) {
+  return {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open),          Key(1.2, grasp, open),
+          Key(2.0, grasp, p.under, grip),      Key(2.4, grasp, p.touch, grip), Key(2.9, grasp, p.pinch, grip),
+          Key(3.1, grasp, p.pinch, grip)};
+}
+
 Transform Back(const Transform& T, double d) {  // along the palm's -z
   Transform out = T;
   out.translation() -= d * T.linear().col(2);
@@ -72,6 +103,8 @@ Transform Back(const Transform& T, double d) {  // along the palm's -z
 std::vector<Scenario> Build() {
   std::vector<Scenario> all;
   const auto open = Hand(0.05, 0.0, 0.05, 0.05, 0.3, 0.0, 0.1, 0.1);
+  // For the pinches: middle and ring curled out of the way.
+  const auto relaxed = With(With(open, "middle", 0.3, 1.0, 0.8), "ring", 0.3, 1.0, 0.8);
 
   {  // Exp. I: power grasp of a ketchup bottle, which tilts in the hand as it is lifted.
     Scenario s;
@@ -84,8 +117,7 @@ std::vector<Scenario> Build() {
     const Transform grasp = Pose(Vec3(-0.026, 0.05, 0.055), PalmAxes(Vec3(0, 0, 1), Vec3(0, -1, 0)));
     const auto closed = Hand(0.0, 1.4, 1.3, 1.0, 0.0, 0.6, 0.6, 0.6);
     constexpr double kGrip = 0.7, kLoose = 0.06;  // loosened for a moment: the bottle tilts
-    auto fingers_only = closed;  // fingers first, then the thumb
-    for (const char* j : {"thumb_abduction", "thumb_flex1", "thumb_flex2", "thumb_flex3"}) fingers_only[j] = open.at(j);
+    const auto fingers_only = WithThumbOf(closed, open);  // fingers first, then the thumb
     s.keys = {Key(0.0, Back(grasp, 0.07), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
               Key(1.9, grasp, fingers_only, kGrip), Key(2.4, grasp, closed, kGrip), Key(2.6, grasp, closed, kGrip),
               Key(4.0, Lifted(grasp, 0.12), closed, kGrip), Key(4.6, Lifted(grasp, 0.12), closed, kLoose),
@@ -101,29 +133,24 @@ std::vector<Scenario> Build() {
     s.name = "brush-rotation";
     s.description = "fingertip grasp of a brush's handle overhanging a book (index under, thumb on top), lift, roll it in the fingers";
     s.object = "brush";
-    Scenario::Prop book;
-    book.T_W = MakeTransform(Vec3(0.0, 0.09, 0.0125), Mat3::Identity());
-    book.half_extents = Vec3(0.075, 0.075, 0.0125);  // its edge at y = 0.015, under the head
-    book.rgba = Eigen::Vector4d(0.55, 0.2, 0.15, 1.0);
-    s.props.push_back(book);
+    // A book, its edge at y = 0.015 under the brush's head.
+    s.props.push_back(Box(Vec3(0.0, 0.09, 0.0125), Vec3(0.075, 0.075, 0.0125), Eigen::Vector4d(0.55, 0.2, 0.15, 1.0)));
     // On its bristles on the book, the handle along -y over the edge (its axis at z = 56.2 mm).
     s.T_WO = MakeTransform(Vec3(0.0, 0.0, 0.025 + 0.0312), ExpSO3(Vec3(0, 0, M_PI / 2)));
     // Palm down, fingers along +x across the handle, 5 cm from the head; the pinch of the pen
     // scenario solved again for the handle's radius (11.5 mm) with the palm 39 mm above its
     // axis, where both contact normals are within 19 deg of the vertical. Rolled: 6 mm each.
     const Transform grasp = Pose(Vec3(-0.097, -0.077, 0.0952), PalmAxes(Vec3(0, 1, 0), Vec3(1, 0, 0)));
-    const auto relaxed = With(With(open, "middle", 0.3, 1.0, 0.8), "ring", 0.3, 1.0, 0.8);
-    const auto under = With(relaxed, "index", 0.943, 0.813, 0.813);
-    const auto touch = WithThumb(With(relaxed, "index", 0.897, 0.917, 0.917), 1.076, -0.154, 1.234, 0.987);
-    const auto pinch = WithThumb(With(relaxed, "index", 0.879, 0.965, 0.965), 0.996, 0.135, 1.042, 0.833);
-    const auto roll_a = WithThumb(With(relaxed, "index", 0.984, 0.923, 0.923), 1.006, 0.146, 0.947, 0.757);
-    const auto roll_b = WithThumb(With(relaxed, "index", 0.776, 0.997, 0.997), 0.984, 0.14, 1.126, 0.901);
+    const Pinch p{With(relaxed, "index", 0.943, 0.813, 0.813),
+                  WithThumb(With(relaxed, "index", 0.897, 0.917, 0.917), 1.076, -0.154, 1.234, 0.987),
+                  WithThumb(With(relaxed, "index", 0.879, 0.965, 0.965), 0.996, 0.135, 1.042, 0.833),
+                  WithThumb(With(relaxed, "index", 0.984, 0.923, 0.923), 1.006, 0.146, 0.947, 0.757),
+                  WithThumb(With(relaxed, "index", 0.776, 0.997, 0.997), 0.984, 0.14, 1.126, 0.901)};
     constexpr double kGrip = 0.8;
     const Transform up = Lifted(grasp, 0.08);
-    s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
-              Key(2.0, grasp, under, kGrip), Key(2.4, grasp, touch, kGrip), Key(2.9, grasp, pinch, kGrip),
-              Key(3.1, grasp, pinch, kGrip), Key(4.1, up, pinch, kGrip), Key(4.9, up, roll_a, kGrip),
-              Key(5.7, up, roll_b, kGrip), Key(6.5, up, roll_a, kGrip), Key(6.8, up, roll_a, kGrip)};
+    s.keys = PinchApproach(grasp, open, p, kGrip);
+    s.keys.insert(s.keys.end(), {Key(4.1, up, p.pinch, kGrip), Key(4.9, up, p.roll_a, kGrip), Key(5.7, up, p.roll_b, kGrip),
+                                 Key(6.5, up, p.roll_a, kGrip), Key(6.8, up, p.roll_a, kGrip)});
     s.close_start = 1.2;
     s.grasp_closed = 3.1;
     s.camera_target = Vec3(0.0, 0.0, 0.12);
@@ -139,8 +166,7 @@ std::vector<Scenario> Build() {
     Transform pushed = touch;
     pushed.translation().x() += 0.06;
     const auto closed = Hand(0.0, 1.4, 1.3, 1.0, 0.0, 0.6, 0.6, 0.6);
-    auto fingers_only = closed;
-    for (const char* j : {"thumb_abduction", "thumb_flex1", "thumb_flex2", "thumb_flex3"}) fingers_only[j] = open.at(j);
+    const auto fingers_only = WithThumbOf(closed, open);
     s.keys = {Key(0.0, Back(touch, 0.06), open), Key(1.0, Back(touch, 0.005), open), Key(2.4, pushed, open),
               Key(2.6, pushed, open), Key(3.3, pushed, fingers_only, 0.7), Key(3.8, pushed, closed, 0.7),
               Key(4.0, pushed, closed, 0.7), Key(5.4, Lifted(pushed, 0.12), closed, 0.7), Key(6.2, Lifted(pushed, 0.12), closed, 0.7)};
@@ -159,8 +185,7 @@ std::vector<Scenario> Build() {
     // Fingers half closed on the wide side: the middle phalanges and the thumb hold it.
     const Transform grasp = Pose(Vec3(-0.028, 0.045, 0.09), R);
     const auto closed = Hand(0.05, 1.2, 1.0, 0.9, 0.0, 0.6, 0.6, 0.6);
-    auto fingers_only = closed;
-    for (const char* j : {"thumb_abduction", "thumb_flex1", "thumb_flex2", "thumb_flex3"}) fingers_only[j] = open.at(j);
+    const auto fingers_only = WithThumbOf(closed, open);
     Transform turned = Lifted(grasp, 0.10);
     turned.linear() = ExpSO3(Vec3(0, 0, 0.4)) * turned.linear();
     s.keys = {Key(0.0, Back(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
@@ -175,11 +200,8 @@ std::vector<Scenario> Build() {
     s.name = "pen-fingertip";
     s.description = "fingertip grasp of a pen lying on a book, its end over the edge; lift, roll it twice back and forth";
     s.object = "pen";
-    Scenario::Prop book;
-    book.T_W = MakeTransform(Vec3(0.07, 0.0, 0.0125), Mat3::Identity());
-    book.half_extents = Vec3(0.10, 0.075, 0.0125);  // its edge at x = -0.03
-    book.rgba = Eigen::Vector4d(0.15, 0.35, 0.55, 1.0);
-    s.props.push_back(book);
+    // A book, its edge at x = -0.03.
+    s.props.push_back(Box(Vec3(0.07, 0.0, 0.0125), Vec3(0.10, 0.075, 0.0125), Eigen::Vector4d(0.15, 0.35, 0.55, 1.0)));
     s.T_WO = MakeTransform(Vec3(0.005, 0.0, 0.025 + 0.0055), Mat3::Identity());  // along x, 3.75 cm over the edge
     // Palm down, fingers along -y across the pen, 1.75 cm from its end: the index curls under
     // the overhanging end, the thumb comes down on top, and the two squeeze it.
@@ -190,19 +212,16 @@ std::vector<Scenario> Build() {
     // out sideways. Each aims 2.5 mm inside the pen; the index first stops 2.6 mm short of it.
     // Rolled: both tips moved 2.5 mm along the tangent, in opposite directions.
     const Transform grasp = Pose(Vec3(-0.077, 0.097, 0.0825), PalmAxes(Vec3(1, 0, 0), Vec3(0, -1, 0)));
-    const auto relaxed = With(With(open, "middle", 0.3, 1.0, 0.8), "ring", 0.3, 1.0, 0.8);  // out of the way
-    const auto under = With(relaxed, "index", 1.039, 0.647, 0.647);
-    const auto touch = WithThumb(With(relaxed, "index", 0.994, 0.757, 0.757), 0.943, 0.23, 1.107, 0.886);
-    const auto pinch = WithThumb(With(relaxed, "index", 0.978, 0.807, 0.807), 0.855, 0.511, 0.801, 0.64);
-    const auto roll_a = WithThumb(With(relaxed, "index", 1.025, 0.777, 0.777), 0.873, 0.5, 0.778, 0.623);
-    const auto roll_b = WithThumb(With(relaxed, "index", 0.932, 0.835, 0.835), 0.835, 0.524, 0.821, 0.657);
+    const Pinch p{With(relaxed, "index", 1.039, 0.647, 0.647),
+                  WithThumb(With(relaxed, "index", 0.994, 0.757, 0.757), 0.943, 0.23, 1.107, 0.886),
+                  WithThumb(With(relaxed, "index", 0.978, 0.807, 0.807), 0.855, 0.511, 0.801, 0.64),
+                  WithThumb(With(relaxed, "index", 1.025, 0.777, 0.777), 0.873, 0.5, 0.778, 0.623),
+                  WithThumb(With(relaxed, "index", 0.932, 0.835, 0.835), 0.835, 0.524, 0.821, 0.657)};
     constexpr double kGrip = 0.6;
     const Transform up = Lifted(grasp, 0.07);
-    s.keys = {Key(0.0, Lifted(grasp, 0.06), open), Key(1.0, grasp, open), Key(1.2, grasp, open),
-              Key(2.0, grasp, under, kGrip), Key(2.4, grasp, touch, kGrip), Key(2.9, grasp, pinch, kGrip),
-              Key(3.1, grasp, pinch, kGrip), Key(3.9, up, pinch, kGrip), Key(4.5, up, roll_a, kGrip),
-              Key(5.1, up, roll_b, kGrip), Key(5.7, up, roll_a, kGrip), Key(6.3, up, roll_b, kGrip),
-              Key(6.7, up, pinch, kGrip)};
+    s.keys = PinchApproach(grasp, open, p, kGrip);
+    s.keys.insert(s.keys.end(), {Key(3.9, up, p.pinch, kGrip), Key(4.5, up, p.roll_a, kGrip), Key(5.1, up, p.roll_b, kGrip),
+                                 Key(5.7, up, p.roll_a, kGrip), Key(6.3, up, p.roll_b, kGrip), Key(6.7, up, p.pinch, kGrip)});
     s.close_start = 1.2;
     s.grasp_closed = 3.1;
     s.camera_target = Vec3(-0.03, 0.0, 0.06);
