@@ -41,12 +41,27 @@ ObjectModel Ball(double radius) {
 
 Transform At(const Vec3& p) { return MakeTransform(p, Mat3::Identity()); }
 
+// The paper's "perfect" contact measurement (σ = 1 mm): the single-update and convergence-rate
+// expectations below are derived for it.
+FilterParams PerfectContacts() {
+  FilterParams params;
+  params.contact_sigma = 0.001;
+  return params;
+}
+
 struct FingerScene {
   HandModel hand = ParseHandModel(kFinger, ".", "finger.urdf");
   ObjectModel ball = Ball(0.02);
   BulletContactQuery query{hand, ball};
   int l2 = hand.LinkIndex("l2");
   Eigen::Vector2d q0 = Eigen::Vector2d::Zero();
+
+  // A filter on this finger, started at T0 with the paper's initial σ (20 mm, 5°) and exact joints.
+  Filter Started(const Transform& T0, const FilterParams& params, bool torque) {
+    Filter f(hand, query, params, torque);
+    f.Reset(T0, q0, 0.02, 0.087, 1e-9);
+    return f;
+  }
 
   // τ = J_cᵀ λ for a force λ applied by link l2 at c_f (palm frame).
   Eigen::Vector2d Torque(const Eigen::Vector2d& q, const Vec3& c_f, const Vec3& force) const {
@@ -69,12 +84,9 @@ struct FingerScene {
 
 TEST(Filter, PenetratingObjectIsPushedOutAlongTheNormal) {
   FingerScene s;
-  FilterParams params;
-  params.contact_sigma = 0.001;  // the paper's "perfect" measurement: one update removes it all
-  Filter filter(s.hand, s.query, params, false);
   // The ball's centre 25 mm above the distal link's axis: 5 mm penetration, normal +z.
   const Transform T0 = At(Vec3(0, 0.07, 0.025));
-  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  Filter filter = s.Started(T0, PerfectContacts(), false);  // one update removes it all
   filter.Predict(s.q0, 0.001);
   filter.UpdateContacts(Eigen::Vector2d::Zero());
   ASSERT_FALSE(filter.trace().contacts.empty());
@@ -88,13 +100,10 @@ TEST(Filter, PenetratingObjectIsPushedOutAlongTheNormal) {
 
 TEST(Filter, TorqueConfirmedContactPullsTheObjectIntoTouch) {
   FingerScene s;
-  FilterParams params;
-  params.contact_sigma = 0.001;  // the paper's "perfect" measurement: one update closes the gap
-  Filter filter(s.hand, s.query, params, true);
   // 2 mm above the distal link's far end (within the 3 mm candidate range), out of the
   // proximal link's.
   const Transform T0 = At(Vec3(0, 0.085, 0.032));
-  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  Filter filter = s.Started(T0, PerfectContacts(), true);  // one update closes the gap
   ASSERT_NEAR(s.Distance(s.q0, T0), 0.002, 1e-9);
   const Eigen::Vector2d tau = s.Torque(s.q0, Vec3(0, 0.085, 0.01), Vec3(0, 0, 5.0));
   filter.Predict(s.q0, 0.001);
@@ -115,9 +124,8 @@ TEST(Filter, AWeakenedGripGrowsTheRandomWalk) {
   FilterParams params;
   params.slip_torque = 2.0;
   params.slip_scale = 30.0;
-  Filter filter(s.hand, s.query, params, true);
   const Transform T0 = At(Vec3(0, 0.085, 0.06));  // out of reach: no contacts
-  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  Filter filter = s.Started(T0, params, true);
   const double dt = 0.002;
   const auto growth = [&](const Eigen::Vector2d& tau) {
     filter.UpdateContacts(tau);
@@ -133,8 +141,7 @@ TEST(Filter, AWeakenedGripGrowsTheRandomWalk) {
   EXPECT_NEAR(growth(Eigen::Vector2d(0.1, 0.1)), 900.0 * walk, 1e-10);  // let go
   EXPECT_TRUE(filter.trace().slipping);
   params.slip_torque = 0.0;  // disabled
-  Filter off(s.hand, s.query, params, true);
-  off.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  Filter off = s.Started(T0, params, true);
   off.UpdateContacts(Eigen::Vector2d(1.5, -1.0));
   off.Predict(s.q0, dt);
   off.UpdateContacts(Eigen::Vector2d(0.1, 0.1));
@@ -154,8 +161,7 @@ TEST(Filter, ForcesOutsideTheConeOrBelowThresholdAreRejected) {
       {Vec3(0, 3.0, 4.0), ContactKind::kTorque},                           // 36.9°: inside
       {Vec3(0, 0, -5.0), ContactKind::kRejectedCone}};                     // pulling, not pushing
   for (const auto& [force, kind] : cases) {
-    Filter filter(s.hand, s.query, FilterParams(), true);
-    filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+    Filter filter = s.Started(T0, FilterParams(), true);
     filter.Predict(s.q0, 0.001);
     filter.UpdateContacts(s.Torque(s.q0, c_f, force));
     ASSERT_EQ(filter.trace().contacts.size(), 1u);
@@ -180,9 +186,7 @@ TEST(Filter, JointBiasConvergesWhenAContactConstrainsIt) {
   ASSERT_NEAR(s.Distance(q_true, T_PO), 0.0, 1e-9);
   const Eigen::Vector2d tau = s.Torque(q_true, c_f, 5.0 * n);
 
-  FilterParams params;
-  params.contact_sigma = 0.001;  // the rate below is for the paper's 1 mm
-  Filter filter(s.hand, s.query, params, true);
+  Filter filter(s.hand, s.query, PerfectContacts(), true);  // the rate below is for 1 mm
   // The object pose is known; j1 is accurate, j2's bias is uncertain (5°).
   filter.Reset(T_PO, s.q0, 1e-6, 1e-6, Eigen::Vector2d(1e-9, 5.0 * M_PI / 180));
   const double sigma0 = std::sqrt(filter.covariance()(7, 7));
@@ -272,9 +276,8 @@ TEST(Filter, PredictionMovesAGraspedObjectWithTheFingers) {
   // The finger touches the ball and flexes: with one hard contact the minimum-norm twist is a
   // pure translation, so the ball follows the contact point.
   FingerScene s;
-  Filter filter(s.hand, s.query, FilterParams(), false);
   const Transform T0 = At(Vec3(0, 0.07, 0.0295));  // 0.5 mm penetration: an active contact
-  filter.Reset(T0, s.q0, 0.02, 0.087, 1e-9);
+  Filter filter = s.Started(T0, FilterParams(), false);
   filter.Predict(s.q0, 0.001);
   filter.UpdateContacts(Eigen::Vector2d::Zero());
   const Vec3 before = filter.position();

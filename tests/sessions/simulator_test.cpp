@@ -105,42 +105,38 @@ SimulationSummary Physics(const std::string& scenario) {
 }
 
 // Physical plausibility of every scenario (the simulation speed is a benchmark:
-// tests/bench/bench_simulator.cpp).
+// tests/bench/bench_simulator.cpp): held (two links touching) from the moment the fingers have
+// closed, lifted at least `lift`, no finger deeper than 1 mm in the object.
+void ExpectHeldAndLifted(const SimulationSummary& s, double lift) {
+  EXPECT_GT(s.held_fraction, 0.95);
+  EXPECT_GT(s.lift_height, lift);
+  EXPECT_LT(s.max_penetration, 0.001);
+}
+
 TEST(SimulatorPhysics, KetchupIsHeldLiftedAndTiltsInTheHand) {
   const SimulationSummary s = Physics("ketchup-power-grasp");
-  EXPECT_GT(s.held_fraction, 0.95);
-  EXPECT_GT(s.lift_height, 0.08);
-  EXPECT_LT(s.max_penetration, 0.001);
+  ExpectHeldAndLifted(s, 0.08);
   EXPECT_GT(s.tilt_in_hand_deg, 5.0);
 }
 
 TEST(SimulatorPhysics, WaterBottleIsPushedAlongTheTableThenHeld) {
   const SimulationSummary s = Physics("water-push-grasp");
   EXPECT_GT(s.table_travel_before_grasp, 0.01);
-  EXPECT_GT(s.held_fraction, 0.95);
-  EXPECT_GT(s.lift_height, 0.08);
-  EXPECT_LT(s.max_penetration, 0.001);
+  ExpectHeldAndLifted(s, 0.08);
 }
 
-// The fingertip grasps: held between the index and the thumb from the moment the fingers have
-// closed, lifted off their book, and rolled in the fingers by more than 10 deg.
+// The fingertip grasps: pinched between the index and the thumb, lifted off their book, and
+// rolled in the fingers by more than 10 deg.
 void ExpectPinchedLiftedAndRolled(const std::string& scenario) {
   const SimulationSummary s = Physics(scenario);
-  EXPECT_GT(s.held_fraction, 0.95);
-  EXPECT_GT(s.lift_height, 0.06);
-  EXPECT_LT(s.max_penetration, 0.001);
+  ExpectHeldAndLifted(s, 0.06);
   EXPECT_GT(s.max_in_hand_rotation_deg, 10.0);
 }
 
 TEST(SimulatorPhysics, BrushIsPinchedLiftedAndRolledInTheFingers) { ExpectPinchedLiftedAndRolled("brush-rotation"); }
 TEST(SimulatorPhysics, PenIsPinchedLiftedAndRolledInTheFingers) { ExpectPinchedLiftedAndRolled("pen-fingertip"); }
 
-TEST(SimulatorPhysics, ShampooIsHeldAndLifted) {
-  const SimulationSummary s = Physics("shampoo-grasp");
-  EXPECT_GT(s.held_fraction, 0.95);
-  EXPECT_GT(s.lift_height, 0.08);
-  EXPECT_LT(s.max_penetration, 0.001);
-}
+TEST(SimulatorPhysics, ShampooIsHeldAndLifted) { ExpectHeldAndLifted(Physics("shampoo-grasp"), 0.08); }
 
 }  // namespace
 }  // namespace inhand
