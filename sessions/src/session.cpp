@@ -111,11 +111,21 @@ void RequireHeader(const Csv& csv, const std::vector<std::string>& expected) {
   }
 }
 
-void RequireIncreasing(const Csv& csv, const CsvRow& row, double prev, double t) {
-  if (!(t > prev))
-    throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) +
-                     " does not increase (previous " + FormatDouble(prev) + ")");
-}
+// Column 0 of a file's rows, read in order: a finite time that must increase from row to row.
+class TimeColumn {
+ public:
+  double operator()(const Csv& csv, const CsvRow& row) {
+    const double t = ParseNumber(csv, row, 0);
+    if (!(t > prev_))
+      throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) +
+                       " does not increase (previous " + FormatDouble(prev_) + ")");
+    prev_ = t;
+    return t;
+  }
+
+ private:
+  double prev_ = -std::numeric_limits<double>::infinity();
+};
 
 // px,py,pz,qw,qx,qy,qz starting at column `c`.
 Transform ParsePose(const Csv& csv, const CsvRow& row, std::size_t c) {
@@ -129,6 +139,12 @@ Transform ParsePose(const Csv& csv, const CsvRow& row, std::size_t c) {
 }
 
 const std::vector<std::string> kPoseColumns = {"px", "py", "pz", "qw", "qx", "qy", "qz"};
+
+// A header: `leading` columns, then the pose's.
+std::vector<std::string> WithPoseColumns(std::vector<std::string> leading) {
+  leading.insert(leading.end(), kPoseColumns.begin(), kPoseColumns.end());
+  return leading;
+}
 
 std::string PoseFields(const Transform& T) {
   const Quat q(T.linear());
@@ -231,13 +247,10 @@ Session Session::Load(const std::string& dir) {
   const long n = static_cast<long>(joints.rows.size());
   s.q_.resize(n, static_cast<long>(m));
   s.tau_.resize(n, static_cast<long>(m));
-  double prev = -std::numeric_limits<double>::infinity();
+  TimeColumn joint_time;
   for (long k = 0; k < n; ++k) {
     const CsvRow& row = joints.rows[static_cast<std::size_t>(k)];
-    const double t = ParseNumber(joints, row, 0);
-    RequireIncreasing(joints, row, prev, t);
-    prev = t;
-    s.t_.push_back(t);
+    s.t_.push_back(joint_time(joints, row));
     for (std::size_t j = 0; j < m; ++j) {
       s.q_(k, static_cast<long>(j)) = ParseNumber(joints, row, 1 + j);
       s.tau_(k, static_cast<long>(j)) = ParseNumber(joints, row, 1 + m + j);
@@ -252,15 +265,11 @@ Session Session::Load(const std::string& dir) {
     if (!info.camera)
       throw InputError(json_path + ": camera.csv exists but session.json has no \"camera\" intrinsics");
     const Csv cam = ReadCsv(camera_csv.string());
-    std::vector<std::string> expected = {"t", "image"};
-    expected.insert(expected.end(), kPoseColumns.begin(), kPoseColumns.end());
-    RequireHeader(cam, expected);
-    prev = -std::numeric_limits<double>::infinity();
+    RequireHeader(cam, WithPoseColumns({"t", "image"}));
+    TimeColumn frame_time;
     for (const CsvRow& row : cam.rows) {
       CameraFrame f;
-      f.t = ParseNumber(cam, row, 0);
-      RequireIncreasing(cam, row, prev, f.t);
-      prev = f.t;
+      f.t = frame_time(cam, row);
       f.image = row.fields[1];
       if (f.image.empty() || !fs::is_regular_file(s.Resolve(f.image)))
         throw InputError(cam.file + ":" + std::to_string(row.line) + ": image '" + f.image +
@@ -273,15 +282,11 @@ Session Session::Load(const std::string& dir) {
   const fs::path gt_csv = fs::path(dir) / "groundtruth.csv";
   if (fs::exists(gt_csv)) {
     const Csv gt = ReadCsv(gt_csv.string());
-    std::vector<std::string> expected = {"t"};
-    expected.insert(expected.end(), kPoseColumns.begin(), kPoseColumns.end());
-    RequireHeader(gt, expected);
-    prev = -std::numeric_limits<double>::infinity();
+    RequireHeader(gt, WithPoseColumns({"t"}));
+    TimeColumn sample_time;
     for (const CsvRow& row : gt.rows) {
       GroundTruthSample g;
-      g.t = ParseNumber(gt, row, 0);
-      RequireIncreasing(gt, row, prev, g.t);
-      prev = g.t;
+      g.t = sample_time(gt, row);
       g.T_PO = ParsePose(gt, row, 1);
       s.groundtruth_.push_back(g);
     }
