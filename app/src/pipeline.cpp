@@ -51,8 +51,7 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
     if (!session_.info().camera) throw InputError(session_.dir() + ": modality jtf needs camera images, the session has none");
     renderer_ = std::make_unique<Renderer>();
     hand_meshes_ = UploadHand(*renderer_, models_.hand);
-    object_meshes_ = UploadObject(*renderer_, models_.object);  // with its printed tags: its appearance
-    for (const TriangleMesh& m : PrintedTagMeshes(models_.object)) object_meshes_.push_back(renderer_->AddMesh(m));
+    object_meshes_ = UploadObject(*renderer_, models_.object, PrintedTagMeshes(models_.object));  // its appearance
   }
   if (tags) {
     if (!session_.info().camera) throw InputError(session_.dir() + ": modality jta needs camera images, the session has none");
@@ -267,8 +266,7 @@ OverlayContact::Kind Kind(ContactKind k) {
 
 FrameComposer::FrameComposer(const Pipeline& pipeline) : p_(pipeline) {
   hand_meshes_ = UploadHand(renderer_, p_.models().hand);
-  object_meshes_ = UploadObject(renderer_, p_.models().object);
-  for (const TriangleMesh& m : PrintedTagMeshes(p_.models().object)) object_meshes_.push_back(renderer_.AddMesh(m));
+  object_meshes_ = UploadObject(renderer_, p_.models().object, PrintedTagMeshes(p_.models().object));
   painter_ = std::make_unique<OverlayPainter>(renderer_, object_meshes_);
 }
 

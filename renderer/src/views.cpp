@@ -12,9 +12,10 @@ HandMeshes UploadHand(Renderer& renderer, const HandModel& hand) {
   return out;
 }
 
-std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object) {
+std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object, const std::vector<TriangleMesh>& printed) {
   std::vector<int> ids;
   for (const TriangleMesh& m : object.visual) ids.push_back(renderer.AddMesh(m));
+  for (const TriangleMesh& m : printed) ids.push_back(renderer.AddMesh(m));
   return ids;
 }
 

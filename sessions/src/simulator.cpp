@@ -225,8 +225,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   if (opt.images) {
     renderer = std::make_unique<Renderer>();
     hand_meshes = UploadHand(*renderer, hand);
-    object_meshes = UploadObject(*renderer, object);
-    for (const TriangleMesh& tag : PrintedTagMeshes(object)) object_meshes.push_back(renderer->AddMesh(tag));
+    object_meshes = UploadObject(*renderer, object, PrintedTagMeshes(object));
     std::mt19937 clutter_rng(12345);  // the same room for every seed
     world_scene.K = K;
     world_scene.T_PC = T_WC;

@@ -94,9 +94,7 @@ void BM_TagDetection640(benchmark::State& state) {
   scene.K = IntrinsicsFromFov(640, 480, 45);
   scene.background = Vec3(0.6, 0.6, 0.6);
   scene.T_PC = LookAt(Vec3(0.05, -0.35, 0.15), Vec3(0, 0, 0.1), Vec3::UnitZ());
-  AddObject(scene, UploadObject(renderer, object), Transform::Identity());
-  for (const TagPlacement& tag : object.tags)
-    scene.items.push_back({renderer.AddMesh(MakeTagMesh(tag)), tag.T_OT * MakeTransform(Vec3(0, 0, 0.0002), Mat3::Identity()), 1, std::nullopt, 1.0, false});
+  AddObject(scene, UploadObject(renderer, object, PrintedTagMeshes(object)), Transform::Identity());
   RenderOutput out;
   renderer.Render(scene, out, false);
   TagDetector detector;

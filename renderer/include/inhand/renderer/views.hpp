@@ -18,7 +18,10 @@ struct HandMeshes {
   std::vector<std::vector<int>> link_meshes;  // per link, renderer mesh ids
 };
 HandMeshes UploadHand(Renderer& renderer, const HandModel& hand);
-std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object);
+// The object's visual meshes, then `printed` (meshes already in the object frame: its printed
+// tags, see PrintedTagMeshes), all placed together by AddObject.
+std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object,
+                              const std::vector<TriangleMesh>& printed = {});
 
 void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform>& T_PL,
              double opacity = 1.0);
