@@ -457,26 +457,19 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
     }
     if (ImGui::BeginTabItem("Feature matching")) {
       const float w = (avail - 16) / 3;
-      ImGui::Text("camera edges");
-      ImGui::SameLine(w + 8);
-      ImGui::Text("virtual edges");
-      ImGui::SameLine(2 * w + 16);
-      ImGui::Text("|camera - virtual|");
-      tex.camera_edges.Show(w);
-      ImGui::SameLine();
-      tex.virtual_edges.Show(w);
-      ImGui::SameLine();
-      tex.difference.Show(w);
-      ImGui::Text("Harris corners (kept green)");
-      ImGui::SameLine(w + 8);
-      ImGui::Text("contour pieces");
-      ImGui::SameLine(2 * w + 16);
-      ImGui::Text("matches (RANSAC inliers green)");
-      tex.corners.Show(w);
-      ImGui::SameLine();
-      tex.pieces.Show(w);
-      ImGui::SameLine();
-      tex.matches.Show(w);
+      // A row of three titled pictures.
+      const auto row = [&](const std::array<const char*, 3>& titles, const std::array<const Texture*, 3>& pictures) {
+        for (int c = 0; c < 3; ++c) {
+          if (c) ImGui::SameLine(static_cast<float>(c) * (w + 8));
+          ImGui::Text("%s", titles[static_cast<std::size_t>(c)]);
+        }
+        for (int c = 0; c < 3; ++c) {
+          if (c) ImGui::SameLine();
+          pictures[static_cast<std::size_t>(c)]->Show(w);
+        }
+      };
+      row({"camera edges", "virtual edges", "|camera - virtual|"}, {&tex.camera_edges, &tex.virtual_edges, &tex.difference});
+      row({"Harris corners (kept green)", "contour pieces", "matches (RANSAC inliers green)"}, {&tex.corners, &tex.pieces, &tex.matches});
       ImGui::Text("Hough votes per corner");
       tex.votes.Show(avail);
       const MatchResult& m = p.last_feature_step().match;
