@@ -125,7 +125,7 @@ std::vector<Scenario> Build() {
     s.close_start = 1.2;
     s.grasp_closed = 2.6;
     s.camera_target = Vec3(0.0, 0.0, 0.17);
-    s.initial_error_direction_W = Vec3(0, 0, 1);  // "20 mm too high", as in Exp. I
+    s.start = Scenario::Start::kTooHigh;  // "purposely set 20 mm higher"
     all.push_back(s);
   }
   {  // Exp. II: fingertip grasp of a brush, then rolled in the hand by the thumb and the index.
@@ -225,6 +225,7 @@ std::vector<Scenario> Build() {
     s.close_start = 1.2;
     s.grasp_closed = 3.1;
     s.camera_target = Vec3(-0.03, 0.0, 0.06);
+    s.start = Scenario::Start::kByHand;  // too small for markers: "manually set"
     all.push_back(s);
   }
   return all;

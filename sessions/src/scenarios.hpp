@@ -26,8 +26,12 @@ struct Scenario {
   double grasp_closed = 0.0;               // [s] when the fingers have closed (for checks)
   double record_start = 1.0;               // [s] the hand is in place: the session begins
   double close_start = 0.0;                // [s] when closing starts
-  Vec3 initial_error_direction_W = Vec3::Zero();  // fixed direction of the initial position
-                                                  // error (0: random)
+  // Where the estimator starts, as in the paper's experiment: from the tracking system (Exp.
+  // II-IV: "if not stated otherwise, the initial pose of the object was provided by the tracking
+  // system"), purposely set too high (Exp. I: "20 mm higher"), or placed by hand (Exp. V: the
+  // pen, "manually set ... roughly aligning it"). The noise profile says how far off each is.
+  enum class Start { kTracked, kTooHigh, kByHand };
+  Start start = Start::kTracked;
   struct Prop {                                   // a static box on the table (e.g. a book)
     Transform T_W = Transform::Identity();
     Vec3 half_extents = Vec3::Zero();

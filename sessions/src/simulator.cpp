@@ -52,7 +52,11 @@ namespace {
 
 // The numbers of each noise profile (documented in sessions/FORMAT.md).
 struct Noise {
-  double initial_position = 0.0;     // [m] magnitude of the initial estimate's error
+  // Magnitudes of the initial estimate's error: a start from the tracking system (its error and
+  // the markers' registration), and a start set by hand or purposely off (Scenario::Start).
+  double tracked_position = 0.0;     // [m]
+  double tracked_orientation = 0.0;  // [rad]
+  double initial_position = 0.0;     // [m]
   double initial_orientation = 0.0;  // [rad]
   double bias_sigma = 0.0;           // [rad] constant joint biases ~ N(0, σ)
   double joint_sigma = 0.0;          // [rad] white noise per sample
@@ -67,6 +71,8 @@ struct Noise {
 Noise NoiseFor(NoiseProfile p) {
   Noise n;
   if (p == NoiseProfile::kNone) return n;
+  n.tracked_position = 0.002;
+  n.tracked_orientation = 1.0 * M_PI / 180;
   n.initial_position = 0.020;
   n.initial_orientation = 5.0 * M_PI / 180;
   n.bias_sigma = 3.0 * M_PI / 180;
@@ -79,6 +85,8 @@ Noise NoiseFor(NoiseProfile p) {
   if (p == NoiseProfile::kHard) {
     n.initial_position *= 2;
     n.initial_orientation *= 2;
+    n.tracked_position = n.initial_position;  // no tracker: every start as if set by hand
+    n.tracked_orientation = n.initial_orientation;
     n.bias_sigma *= 2;
     n.joint_sigma *= 2;
     n.torque_sigma *= 2;
@@ -89,6 +97,26 @@ Noise NoiseFor(NoiseProfile p) {
     n.occluders = 2;
   }
   return n;
+}
+
+const char* StartName(sim::Scenario::Start start) {
+  switch (start) {
+    case sim::Scenario::Start::kTracked: return "tracked";
+    case sim::Scenario::Start::kTooHigh: return "too_high";
+    case sim::Scenario::Start::kByHand: return "by_hand";
+  }
+  return "?";
+}
+
+// Position [m] and orientation [rad] error of the initial estimate. Set too high (Exp. I), the
+// position is off by the hand-set amount straight up and the orientation still by the tracker's.
+std::pair<double, double> StartError(const Noise& n, sim::Scenario::Start start) {
+  switch (start) {
+    case sim::Scenario::Start::kTracked: return {n.tracked_position, n.tracked_orientation};
+    case sim::Scenario::Start::kTooHigh: return {n.initial_position, n.tracked_orientation};
+    case sim::Scenario::Start::kByHand: return {n.initial_position, n.initial_orientation};
+  }
+  return {0.0, 0.0};
 }
 
 std::string AssetDir() {
@@ -273,6 +301,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   const double record_start = scenario->record_start;
   const Vec3 error_dir_random = RandomUnit(rng);
   const Vec3 error_axis = RandomUnit(rng);
+  const std::pair<double, double> start_error = StartError(noise, scenario->start);
   Transform T_PO0 = Transform::Identity();
   info.sigma_position = 0.020;
   info.sigma_orientation = 5.0 * M_PI / 180;
@@ -286,8 +315,9 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
                             {"camera_rate", opt.camera_rate},
                             {"duration", duration},
                             {"noise_parameters",
-                             {{"initial_position_m", noise.initial_position},
-                              {"initial_orientation_rad", noise.initial_orientation},
+                             {{"start", StartName(scenario->start)},
+                              {"initial_position_m", start_error.first},
+                              {"initial_orientation_rad", start_error.second},
                               {"bias_sigma_rad", noise.bias_sigma},
                               {"joint_sigma_rad", noise.joint_sigma},
                               {"torque_sigma_Nm", noise.torque_sigma},
@@ -299,11 +329,10 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   std::unique_ptr<SessionWriter> writer;
   const auto start_recording = [&](const Transform& T_WP_now, const Transform& T_PO_now) {
     T_PO0 = T_PO_now;
-    const Vec3 dir = scenario->initial_error_direction_W.norm() > 0
-                         ? Vec3(T_WP_now.linear().transpose() * scenario->initial_error_direction_W.normalized())
-                         : error_dir_random;
-    info.initial_T_PO = MakeTransform(T_PO0.translation() + noise.initial_position * dir,
-                                      ExpSO3(noise.initial_orientation * error_axis) * T_PO0.linear());
+    const Vec3 dir = scenario->start == sim::Scenario::Start::kTooHigh ? Vec3(T_WP_now.linear().transpose() * Vec3::UnitZ())
+                                                                  : error_dir_random;
+    info.initial_T_PO = MakeTransform(T_PO0.translation() + start_error.first * dir,
+                                      ExpSO3(start_error.second * error_axis) * T_PO0.linear());
     provenance["record_start"] = record_start;
     info.provenance_json = provenance.dump();
     writer = std::make_unique<SessionWriter>(opt.out_dir, info, hand.QNames(), opt.overwrite);
