@@ -1,6 +1,8 @@
 #include "inhand/filter/filter.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "inhand/core/error.hpp"
 
@@ -50,6 +52,8 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
   pairs_.reserve(links);
   active_.reserve(links);
   Jc_.assign(links, Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, m_));
+  inv_weight_.reserve(links);
+  finger_nearest_.assign(hand.joints.size(), 0.0);
   trace_.contacts.reserve(links * static_cast<std::size_t>(params_.contact_iterations));
   trace_.visual.reserve(512);
 }
@@ -189,6 +193,25 @@ double Filter::CandidateWeight(double distance) const {
   return 1.0 + d * d;
 }
 
+// Relative to the nearest candidate on the same finger (the candidates whose joint chains start
+// at the same joint): scaling one finger's weights leaves its forces unchanged but for how the
+// damping acts, so a finger's nearest candidate keeps the paper's pseudo-inverse (a lone
+// candidate 2 mm away gets the paper's force), and only its farther links are discounted.
+void Filter::ComputeCandidateWeights() {
+  const std::size_t k = pairs_.size();
+  inv_weight_.assign(k, 1.0);
+  if (params_.torque_distance_scale <= 0.0) return;
+  const auto finger = [&](std::size_t i) {
+    const std::vector<int>& chain = hand_.support[static_cast<std::size_t>(pairs_[i].link)];
+    return chain.empty() ? -1 : chain.front();
+  };
+  std::fill(finger_nearest_.begin(), finger_nearest_.end(), std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < k; ++i)
+    if (const int f = finger(i); f >= 0) finger_nearest_[f] = std::min(finger_nearest_[f], std::max(pairs_[i].distance, 0.0));
+  for (std::size_t i = 0; i < k; ++i)
+    if (const int f = finger(i); f >= 0) inv_weight_[i] = CandidateWeight(finger_nearest_[f]) / CandidateWeight(pairs_[i].distance);
+}
+
 void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int iteration) {
   q_eff_ = q_prev_ + b_;
   kin_.Update(hand_, q_eff_);
@@ -201,8 +224,9 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
   for (std::size_t i = 0; i < k; ++i) PointJacobian(hand_, kin_, pairs_[i].link, pairs_[i].c_f_P, Jc_[i]);
   const bool torque = use_torque_ && k > 0;
   if (torque) {
+    ComputeCandidateWeights();
     JtJ_.setZero();
-    for (std::size_t i = 0; i < k; ++i) JtJ_.noalias() += (1.0 / CandidateWeight(pairs_[i].distance)) * (Jc_[i].transpose() * Jc_[i]);
+    for (std::size_t i = 0; i < k; ++i) JtJ_.noalias() += inv_weight_[i] * (Jc_[i].transpose() * Jc_[i]);
     JtJ_.diagonal().array() += params_.torque_damping;
     ldlt_.compute(JtJ_);
     y_ = ldlt_.solve(tau);
@@ -220,7 +244,7 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
     rec.c_o_P = pair.c_o_P;
     rec.c_f_P = pair.c_f_P;
     rec.normal_P = pair.normal_P;
-    if (torque) rec.force_P = (1.0 / CandidateWeight(pair.distance)) * (Jc_[i] * y_);
+    if (torque) rec.force_P = inv_weight_[i] * (Jc_[i] * y_);
     if (pair.distance < 0.0) {
       rec.kind = ContactKind::kKinematic;
     } else if (torque) {

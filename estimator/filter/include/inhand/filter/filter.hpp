@@ -113,6 +113,8 @@ class Filter {
   };
   void ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int iteration);
   double CandidateWeight(double distance) const;
+  // inv_weight_[i] = 1 / weight of candidate i relative to its finger's nearest candidate.
+  void ComputeCandidateWeights();
 
   const HandModel& hand_;
   ContactQuery& contacts_;
@@ -143,6 +145,8 @@ class Filter {
   Eigen::Matrix<double, 1, Eigen::Dynamic> H1_, HP1_, SKt1_;
   Eigen::Matrix<double, Eigen::Dynamic, 1> K1_;
   std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> Jc_;  // per candidate
+  std::vector<double> inv_weight_;                            // per candidate
+  std::vector<double> finger_nearest_;                        // per joint: nearest candidate
   Eigen::MatrixXd JtJ_;
   Eigen::VectorXd y_, dq_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
