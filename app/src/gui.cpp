@@ -367,6 +367,10 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   if (ImGui::SliderFloat("friction cone [deg]", &cone, 5.0f, 90.0f)) state.params.friction_cone_deg = cone;
   float pixel = static_cast<float>(state.params.pixel_sigma);
   if (ImGui::SliderFloat("pixel sigma [px]", &pixel, 0.5f, 10.0f)) state.params.pixel_sigma = pixel;
+  float camera_mm = static_cast<float>(state.params.camera_position_sigma * 1000);
+  if (ImGui::SliderFloat("camera sigma [mm]", &camera_mm, 0.0f, 10.0f)) state.params.camera_position_sigma = camera_mm / 1000.0;
+  float camera_deg = static_cast<float>(state.params.camera_orientation_sigma * 180 / M_PI);
+  if (ImGui::SliderFloat("camera sigma [deg]", &camera_deg, 0.0f, 3.0f)) state.params.camera_orientation_sigma = camera_deg * M_PI / 180;
   ImGui::SliderInt("contact iterations", &state.params.contact_iterations, 1, 5);
   ImGui::Checkbox("normal-only contacts", &state.params.contact_normal_only);
   if (ImGui::Button("Recompute from the start")) state.actions.push_back({ActionKind::kRecompute});

@@ -423,20 +423,42 @@ TEST(FilterJacobians, ContactMeasurementJacobianMatchesFiniteDifferences) {
   }
 }
 
-TEST(FilterJacobians, VisualJacobianMatchesFiniteDifferences) {
-  Intrinsics K;
-  K.fx = 600;
-  K.fy = 590;
-  K.cx = 320;
-  K.cy = 240;
-  const Vec3 p(0.0, 0.06, 0.04);
-  // A camera 0.4 m away looking at the object (z towards it, y roughly down).
+// The camera of the visual tests: 0.4 m from p, z towards it, y roughly down.
+Transform CameraLookingAt(const Vec3& p) {
   const Vec3 eye(0.05, -0.3, 0.25);
   const Vec3 z = (p - eye).normalized();
   const Vec3 x = z.cross(Vec3(0, 0, -1)).normalized();
   Mat3 Rc;
   Rc << x, z.cross(x), z;
-  const Transform T_PC = MakeTransform(eye, Rc);
+  return MakeTransform(eye, Rc);
+}
+
+Intrinsics TestIntrinsics() {
+  Intrinsics K;
+  K.fx = 600;
+  K.fy = 590;
+  K.cx = 320;
+  K.cy = 240;
+  return K;
+}
+
+// ∂pix/∂e at e = 0 by central differences, pix: 6-vector -> pixel.
+template <typename Pixel>
+Eigen::Matrix<double, 2, 6> CentralDifferences(const Pixel& pix) {
+  Eigen::Matrix<double, 2, 6> N;
+  for (int i = 0; i < 6; ++i) {
+    Vec6 a = Vec6::Zero(), b = Vec6::Zero();
+    a[i] = 1e-7;
+    b[i] = -1e-7;
+    N.col(i) = (pix(a) - pix(b)) / 2e-7;
+  }
+  return N;
+}
+
+TEST(FilterJacobians, VisualJacobianMatchesFiniteDifferences) {
+  const Intrinsics K = TestIntrinsics();
+  const Vec3 p(0.0, 0.06, 0.04);
+  const Transform T_PC = CameraLookingAt(p);
   for (const Mat3& R : {Mat3(Mat3::Identity()), ExpSO3(Vec3(M_PI, 0, 0)), ExpSO3(Vec3(0.2, 0.5, -0.7))}) {
     for (const Vec3& x_o : {Vec3(0.0, 0.0, 0.0), Vec3(0.03, -0.02, 0.1), Vec3(-0.2, 0.1, 0.05)}) {
       const auto pix = [&](const Vec6& d) {
@@ -446,16 +468,63 @@ TEST(FilterJacobians, VisualJacobianMatchesFiniteDifferences) {
       const Vec3 X = p + R * x_o;
       ASSERT_GT((T_PC.inverse() * X).z(), 0.0);
       const auto H = VisualMeasurementJacobian(X, p, T_PC, K);
-      Eigen::Matrix<double, 2, 6> N;
-      for (int i = 0; i < 6; ++i) {
-        Vec6 a = Vec6::Zero(), b = Vec6::Zero();
-        a[i] = 1e-7;
-        b[i] = -1e-7;
-        N.col(i) = (pix(a) - pix(b)) / 2e-7;
-      }
+      const Eigen::Matrix<double, 2, 6> N = CentralDifferences(pix);
       EXPECT_LT((H - N).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, H.cwiseAbs().maxCoeff())) << H << "\n" << N;
     }
   }
+}
+
+TEST(FilterJacobians, CameraPoseJacobianMatchesFiniteDifferences) {
+  const Intrinsics K = TestIntrinsics();
+  const Transform T_PC = CameraLookingAt(Vec3(0.0, 0.06, 0.04));
+  for (const Vec3& X : {Vec3(0.0, 0.06, 0.04), Vec3(0.03, 0.04, 0.14), Vec3(-0.1, 0.1, 0.0)}) {
+    const auto pix = [&](const Vec6& e) { return K.Project((T_PC * MakeTransform(e.head<3>(), ExpSO3(e.tail<3>()))).inverse() * X); };
+    const auto C = CameraPoseJacobian(X, T_PC, K);
+    const Eigen::Matrix<double, 2, 6> N = CentralDifferences(pix);
+    EXPECT_LT((C - N).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, C.cwiseAbs().maxCoeff())) << C << "\n" << N;
+  }
+}
+
+// Forty object points seen by a camera whose recorded pose is 1.5 mm off along its x axis: the
+// pixels say the object is 1.5 mm off the other way. Fused as independent features, the filter
+// believes them to 0.2 mm; with the camera's σ (2 mm per axis) shared by the frame's features
+// it keeps ~2 mm of doubt along that axis, and with a negligible camera σ (the camera error in
+// the state) it equals the paper's independent features.
+TEST(Filter, FeaturesOfOneFrameShareTheCameraError) {
+  FingerScene s;
+  const Intrinsics K = TestIntrinsics();
+  const Vec3 p(0.0, 0.06, 0.04);
+  const Transform T_PC = CameraLookingAt(p);
+  const Transform T_PC_true = T_PC * MakeTransform(Vec3(0.0015, 0, 0), Mat3::Identity());
+  std::vector<VisualFeature> features;
+  for (int i = 0; i < 40; ++i) {
+    const Vec3 x_O(0.03 * std::cos(0.7 * i), 0.03 * std::sin(1.3 * i), 0.02 * std::cos(2.1 * i));
+    features.push_back({i, x_O, K.Project(T_PC_true.inverse() * (p + x_O))});
+  }
+  const auto fused = [&](double camera_sigma) {
+    FilterParams params;
+    params.pixel_sigma = 2.0;
+    params.visual_gate_chi2 = 0.0;
+    params.camera_position_sigma = camera_sigma;
+    params.camera_orientation_sigma = 0.0;
+    Filter f = s.Started(At(p), params, false);
+    EXPECT_EQ(f.UpdateVisual(features, T_PC, K), 40);
+    return f;
+  };
+  const Vec3 axis = T_PC.linear().col(0);
+  const auto sigma_along = [&](const Filter& f) { return std::sqrt(axis.dot(f.covariance().topLeftCorner<3, 3>() * axis)); };
+  const Filter independent = fused(0.0), shared = fused(0.002), nearly = fused(1e-9);
+  EXPECT_LT(sigma_along(independent), 0.0003);
+  EXPECT_GT(sigma_along(shared), 0.0015);
+  EXPECT_LT(sigma_along(shared), 0.0021);
+  EXPECT_LT((nearly.position() - independent.position()).norm(), 1e-9);
+  EXPECT_LT((nearly.covariance() - independent.covariance()).cwiseAbs().maxCoeff(), 1e-12);
+  // Both move the object by the 1.5 mm the pixels show (against the camera's shift; the prior's
+  // 20 mm leaves no reason not to), the shared one a little less far.
+  const double moved_independent = -axis.dot(independent.position() - p), moved_shared = -axis.dot(shared.position() - p);
+  EXPECT_NEAR(moved_independent, 0.0015, 0.0001);
+  EXPECT_GT(moved_shared, 0.0012);
+  EXPECT_LT(moved_shared, moved_independent);
 }
 
 TEST(FilterParams, ValidationAndJsonRoundTrip) {

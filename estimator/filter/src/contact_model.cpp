@@ -39,4 +39,13 @@ Eigen::Matrix<double, 2, 6> VisualMeasurementJacobian(const Vec3& X_P, const Vec
   return H;
 }
 
+Eigen::Matrix<double, 2, 6> CameraPoseJacobian(const Vec3& X_P, const Transform& T_PC, const Intrinsics& K) {
+  const Vec3 X_C = T_PC.linear().transpose() * (X_P - T_PC.translation());
+  const Eigen::Matrix<double, 2, 3> Jp = K.ProjectJacobian(X_C);
+  Eigen::Matrix<double, 2, 6> C;
+  C.leftCols<3>() = -Jp;
+  C.rightCols<3>() = Jp * Skew(X_C);
+  return C;
+}
+
 }  // namespace inhand

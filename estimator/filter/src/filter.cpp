@@ -293,8 +293,23 @@ void Filter::UpdateContacts(const Eigen::Ref<const Eigen::VectorXd>& tau) {
 }
 
 int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Transform& T_PC, const Intrinsics& K) {
+  // With a camera σ the frame's camera error ξ (6) joins the state for this frame: every feature
+  // is then fused one by one as in the paper, gated against what the features before it showed,
+  // and ξ, shared by all of them, keeps them from counting a common error many times. ξ is
+  // marginalised at the end (a new calibration error each frame: it is not tracked over time).
+  const bool shared = params_.camera_position_sigma > 0.0 || params_.camera_orientation_sigma > 0.0;
+  const int na = shared ? n_ + 6 : n_;
   const Mat3 Rc_T = T_PC.linear().transpose();
   const Eigen::Matrix2d Rv = Eigen::Matrix2d::Identity() * (params_.pixel_sigma * params_.pixel_sigma);
+  Eigen::MatrixXd Pa = Eigen::MatrixXd::Zero(na, na);
+  Pa.topLeftCorner(n_, n_) = P_;
+  if (shared) {
+    Pa.diagonal().segment<3>(n_).setConstant(params_.camera_position_sigma * params_.camera_position_sigma);
+    Pa.diagonal().segment<3>(n_ + 3).setConstant(params_.camera_orientation_sigma * params_.camera_orientation_sigma);
+  }
+  Eigen::VectorXd da = Eigen::VectorXd::Zero(na);
+  da.head(n_) = delta_;
+  Eigen::Matrix<double, 2, Eigen::Dynamic> Ha(2, na), HP(2, na);
   int used = 0;
   for (const VisualFeature& f : features) {
     FilterTrace::Visual rec;
@@ -309,14 +324,32 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
       continue;
     }
     rec.predicted = K.Project(X_C);
-    H2_.setZero();
-    H2_.leftCols<6>() = VisualMeasurementJacobian(X, p_, T_PC, K);
-    const Eigen::Vector2d r = f.pixel - rec.predicted;
-    const bool applied = UpdateBlock<2>(r, H2_, Rv, params_.visual_gate_chi2, &rec.mahalanobis);
-    rec.gated = !applied;
-    used += applied;
+    Ha.setZero();
+    Ha.leftCols<6>() = VisualMeasurementJacobian(X, p_, T_PC, K);
+    if (shared) Ha.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
+    const Eigen::Vector2d r = f.pixel - rec.predicted - Ha * da;
+    HP.noalias() = Ha * Pa;
+    const Eigen::Matrix2d S = HP * Ha.transpose() + Rv;
+    const Eigen::LDLT<Eigen::Matrix2d> ldlt(S);
+    rec.mahalanobis = r.dot(ldlt.solve(r));
+    rec.gated = !(std::isfinite(rec.mahalanobis) && ldlt.isPositive()) ||
+                (params_.visual_gate_chi2 > 0.0 && rec.mahalanobis > params_.visual_gate_chi2);
+    if (rec.gated) {
+      ++trace_.num_gated;
+    } else {
+      const Eigen::Matrix<double, Eigen::Dynamic, 2> Kg = ldlt.solve(HP).transpose();
+      da.noalias() += Kg * r;
+      // Joseph form, expanded as in UpdateBlock.
+      Pa.noalias() -= Kg * HP;
+      Pa.noalias() -= HP.transpose() * Kg.transpose();
+      Pa.noalias() += Kg * (S * Kg.transpose());
+      Pa = 0.5 * (Pa + Pa.transpose()).eval();
+      ++used;
+    }
     trace_.visual.push_back(rec);
   }
+  P_ = Pa.topLeftCorner(n_, n_);
+  delta_ = da.head(n_);
   Commit();
   q_eff_ = q_prev_ + b_;
   kin_.Update(hand_, q_eff_);
