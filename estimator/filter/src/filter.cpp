@@ -48,6 +48,8 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
       H1_(1, n_), HP1_(1, n_), SKt1_(1, n_), K1_(n_, 1),
       JtJ_(m_, m_), y_(m_), dq_(m_), ldlt_(m_) {
   params_.Validate();
+  camera_state_ = params_.camera_position_sigma > 0.0 || params_.camera_orientation_sigma > 0.0;
+  Pxc_.setZero(n_, 6);
   const std::size_t links = hand.links.size();
   pairs_.reserve(links);
   active_.reserve(links);
@@ -82,6 +84,12 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
   active_.clear();
   trace_.Clear();
   grip_ = max_grip_ = 0.0;
+  xi_.setZero();
+  dxi_.setZero();
+  Pxc_.setZero();
+  Pcc_.setZero();
+  Pcc_.diagonal().head<3>().setConstant(params_.camera_position_sigma * params_.camera_position_sigma);
+  Pcc_.diagonal().tail<3>().setConstant(params_.camera_orientation_sigma * params_.camera_orientation_sigma);
 }
 
 Transform Filter::T_PO() const { return MakeTransform(p_, R_); }
@@ -162,6 +170,17 @@ bool Filter::UpdateBlock(const Eigen::Matrix<double, D, 1>& r_in, const Eigen::M
   const Eigen::Matrix<double, D, D> Sinv = ldlt.solve(Eigen::Matrix<double, D, D>::Identity());
   K->noalias() = HP->transpose() * Sinv;
   delta_.noalias() += *K * r;
+  if (camera_state_) {
+    // The camera error is not measured here (H has no columns for it) but moves with what it is
+    // correlated with: its gain Kc = (H Pxc)ᵀ S⁻¹.
+    Eigen::Matrix<double, D, 6> HC;
+    HC.noalias() = H * Pxc_;
+    const Eigen::Matrix<double, 6, D> Kc = HC.transpose() * Sinv;
+    dxi_.noalias() += Kc * r;
+    Pcc_.noalias() -= Kc * HC;
+    Pcc_ = (0.5 * (Pcc_ + Pcc_.transpose())).eval();
+    Pxc_.noalias() -= *K * HC;
+  }
   // Joseph form, expanded: (I-KH)P(I-KH)ᵀ + KRKᵀ = P - K(HP) - (HP)ᵀKᵀ + K S Kᵀ.
   P_.noalias() -= *K * *HP;
   P_.noalias() -= HP->transpose() * K->transpose();
@@ -185,6 +204,8 @@ void Filter::Commit() {
   R_ = Quat(R_).normalized().toRotationMatrix();  // keep R on SO(3) against rounding drift
   b_ += delta_.tail(m_);
   delta_.setZero();
+  xi_ += dxi_;
+  dxi_.setZero();
 }
 
 double Filter::CandidateWeight(double distance) const {
@@ -292,23 +313,25 @@ void Filter::UpdateContacts(const Eigen::Ref<const Eigen::VectorXd>& tau) {
   kin_.Update(hand_, q_eff_);
 }
 
-int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Transform& T_PC, const Intrinsics& K) {
-  // With a camera σ the frame's camera error ξ (6) joins the state for this frame: every feature
-  // is then fused one by one as in the paper, gated against what the features before it showed,
-  // and ξ, shared by all of them, keeps them from counting a common error many times. ξ is
-  // marginalised at the end (a new calibration error each frame: it is not tracked over time).
-  const bool shared = params_.camera_position_sigma > 0.0 || params_.camera_orientation_sigma > 0.0;
-  const int na = shared ? n_ + 6 : n_;
+int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Transform& T_PC_recorded, const Intrinsics& K) {
+  // With a camera σ the camera pose's error ξ is a state: every feature is fused one by one as
+  // in the paper, gated against what the features before it showed, and ξ, shared by all of
+  // them and by every frame, keeps a common error from being counted once per feature.
+  const int na = camera_state_ ? n_ + 6 : n_;
+  const Transform T_PC = camera_state_ ? Transform(T_PC_recorded * MakeTransform(xi_.head<3>(), ExpSO3(xi_.tail<3>())))
+                                       : T_PC_recorded;
   const Mat3 Rc_T = T_PC.linear().transpose();
   const Eigen::Matrix2d Rv = Eigen::Matrix2d::Identity() * (params_.pixel_sigma * params_.pixel_sigma);
-  Eigen::MatrixXd Pa = Eigen::MatrixXd::Zero(na, na);
+  Eigen::MatrixXd Pa(na, na);
   Pa.topLeftCorner(n_, n_) = P_;
-  if (shared) {
-    Pa.diagonal().segment<3>(n_).setConstant(params_.camera_position_sigma * params_.camera_position_sigma);
-    Pa.diagonal().segment<3>(n_ + 3).setConstant(params_.camera_orientation_sigma * params_.camera_orientation_sigma);
-  }
-  Eigen::VectorXd da = Eigen::VectorXd::Zero(na);
+  Eigen::VectorXd da(na);
   da.head(n_) = delta_;
+  if (camera_state_) {
+    Pa.topRightCorner(n_, 6) = Pxc_;
+    Pa.bottomLeftCorner(6, n_) = Pxc_.transpose();
+    Pa.bottomRightCorner<6, 6>() = Pcc_;
+    da.tail<6>() = dxi_;
+  }
   Eigen::Matrix<double, 2, Eigen::Dynamic> Ha(2, na), HP(2, na);
   int used = 0;
   for (const VisualFeature& f : features) {
@@ -326,7 +349,7 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
     rec.predicted = K.Project(X_C);
     Ha.setZero();
     Ha.leftCols<6>() = VisualMeasurementJacobian(X, p_, T_PC, K);
-    if (shared) Ha.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
+    if (camera_state_) Ha.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
     const Eigen::Vector2d r = f.pixel - rec.predicted - Ha * da;
     HP.noalias() = Ha * Pa;
     const Eigen::Matrix2d S = HP * Ha.transpose() + Rv;
@@ -350,6 +373,11 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
   }
   P_ = Pa.topLeftCorner(n_, n_);
   delta_ = da.head(n_);
+  if (camera_state_) {
+    Pxc_ = Pa.topRightCorner(n_, 6);
+    Pcc_ = Pa.bottomRightCorner<6, 6>();
+    dxi_ = da.tail<6>();
+  }
   Commit();
   q_eff_ = q_prev_ + b_;
   kin_.Update(hand_, q_eff_);

@@ -90,6 +90,8 @@ class Filter {
   const Vec3& position() const { return p_; }
   const Mat3& rotation() const { return R_; }
   const Eigen::VectorXd& biases() const { return b_; }
+  // The camera pose's estimated error (v, ω), T_PC_true = T_PC Exp(ξ); zero unless camera σ > 0.
+  const Vec6& camera_error() const { return xi_; }
   const Eigen::MatrixXd& covariance() const { return P_; }
   const FilterTrace& trace() const { return trace_; }
   FilterTrace& mutable_trace() { return trace_; }
@@ -127,6 +129,13 @@ class Filter {
   Eigen::VectorXd b_;
   Eigen::MatrixXd P_;
   Eigen::VectorXd delta_;  // accumulated, not yet applied correction
+  // The camera pose's error ξ = (v, ω), T_PC_true = T_PC Exp(ξ), when camera σ > 0: a state
+  // kept beside the others (its covariance Pcc_, its cross-covariance with them Pxc_), seen by
+  // the visual update only, constant over time.
+  bool camera_state_ = false;
+  Vec6 xi_ = Vec6::Zero(), dxi_ = Vec6::Zero();
+  Eigen::Matrix<double, Eigen::Dynamic, 6> Pxc_;
+  Eigen::Matrix<double, 6, 6> Pcc_ = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::VectorXd q_prev_, q_eff_;
   bool have_prev_ = false;
   double grip_ = 0.0;      // [N m] Σ|τ| of the last contact update
