@@ -23,7 +23,6 @@
 #include <thread>
 #include <fstream>
 #include <iostream>
-#include <sstream>
 
 #include "inhand/app/match_pictures.hpp"
 #include "inhand/app/pipeline.hpp"

@@ -236,15 +236,18 @@ void Pipeline::FeatureUpdate(std::size_t set, int frame) {
     fs.used_match.push_back(static_cast<int>(m));
   }
   const Transform T_CP = cf.T_PC.inverse();
-  fs.residual_before.clear();
-  for (const VisualFeature& v : state_.features) fs.residual_before.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
+  const auto residuals = [&](std::vector<double>& out) {
+    const Transform T_PO = f.T_PO();
+    out.clear();
+    for (const VisualFeature& v : state_.features) out.push_back((K.Project(T_CP * (T_PO * v.x_O)) - v.pixel).norm());
+  };
+  residuals(fs.residual_before);
   state_.last[set].visual_used = f.UpdateVisual(state_.features, cf.T_PC, K);
   state_.last[set].gated += f.trace().num_gated;
   double m2 = 0.0;
   for (const FilterTrace::Visual& v : f.trace().visual) m2 += v.mahalanobis;
   state_.last[set].visual_mahalanobis = f.trace().visual.empty() ? 0.0 : m2 / static_cast<double>(f.trace().visual.size());
-  fs.residual_after.clear();
-  for (const VisualFeature& v : state_.features) fs.residual_after.push_back((K.Project(T_CP * (f.T_PO() * v.x_O)) - v.pixel).norm());
+  residuals(fs.residual_after);
   state_.last[set].visual_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   state_.last[set].T_PO = f.T_PO();
 }

@@ -8,7 +8,6 @@
 #include <fstream>
 #include <iostream>
 #include <iomanip>
-#include <sstream>
 
 #include "inhand/app/commands.hpp"
 #include "inhand/app/pipeline.hpp"

@@ -182,9 +182,9 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
         if (row[x]) real_by_bin[orow[x]].push_back({x - cx, y - cy, 0});
     }
     for (const PieceEdge& e : pieces[i])
-      for (int db = -1; db <= 1; ++db) {
-        const int bin = (e.bin + db + p.orientation_bins) % p.orientation_bins;
-        if (db != 0 && (bin == e.bin || (db == 1 && bin == (e.bin - 1 + p.orientation_bins) % p.orientation_bins))) continue;  // few bins: count each once
+      for (int bin = 0; bin < p.orientation_bins; ++bin) {
+        const int d = std::abs(bin - e.bin);
+        if (std::min(d, p.orientation_bins - d) > 1) continue;  // orientation must agree (±1 bin)
         for (const PieceEdge& r : real_by_bin[static_cast<std::size_t>(bin)]) {
           const int sx = r.dx - e.dx, sy = r.dy - e.dy;
           if (sx < -S || sx > S || sy < -S || sy > S) continue;

@@ -152,12 +152,8 @@ TEST(Tags, RegionSearchAgreesWithTheWholeFrame) {
 // surface along the tag's normal, centred on the tag, and contains the tag's outer corners.
 TEST(Tags, PrintedTagMeshesSitOnTheirPlacements) {
   ObjectModel object;
-  TagPlacement a, b;
-  a.id = 0;
-  a.size = 0.03;
+  TagPlacement a = Tag(0, 0.03), b = Tag(5, 0.02);
   a.T_OT = MakeTransform(Vec3(0.01, 0.02, 0.05), ExpSO3(Vec3(0.3, -0.2, 0.5)));
-  b.id = 5;
-  b.size = 0.02;
   b.T_OT = MakeTransform(Vec3(-0.03, 0.0, 0.0), ExpSO3(Vec3(0.0, M_PI / 2, 0.0)));
   object.tags = {a, b};
   const std::vector<TriangleMesh> meshes = PrintedTagMeshes(object);
