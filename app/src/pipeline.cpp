@@ -42,7 +42,7 @@ Pipeline::Pipeline(Session& session, const FilterParams& params, std::vector<Mod
     sets_ = ParseModalities(!session_.info().camera ? "j,jt" : models_.object.tags.empty() ? "j,jt,jtf" : "j,jt,jta,jtf");
   for (const ModalitySet& s : sets_) {
     queries_.push_back(std::make_unique<BulletContactQuery>(models_.hand, models_.object));
-    filters_.push_back(std::make_unique<Filter>(models_.hand, *queries_.back(), params_, s.torque));
+    filters_.push_back(std::make_unique<Filter>(models_.hand, *queries_.back(), params_, FilterOptions{s.torque}));
   }
   state_.last.resize(sets_.size());
   bool tags = false, features = false;
@@ -86,7 +86,7 @@ void Pipeline::Step(int k) {
   for (std::size_t i = 0; i < filters_.size(); ++i) {
     Filter& f = *filters_[i];
     const auto start = std::chrono::steady_clock::now();
-    if (k == 0) f.Reset(info.initial_T_PO, session_.q(0), info.sigma_position, info.sigma_orientation, info.sigma_joint_bias);
+    if (k == 0) f.Reset(info.initial_T_PO, session_.q(0), StartSigmas{info.sigma_position, info.sigma_orientation, info.sigma_joint_bias, {}});
     f.Predict(session_.q(k), dt);
     f.UpdateContacts(session_.tau(k));
     const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();

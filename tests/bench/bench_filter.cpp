@@ -69,8 +69,8 @@ void StepBenchmark(benchmark::State& state, const std::string& urdf, const std::
   }
   Scene s = MakeScene(urdf, object, R);
   FilterParams params;
-  Filter filter(s.hand, *s.query, params, true);
-  filter.Reset(s.T_PO, s.q, 0.02, 0.087, 0.087);
+  Filter filter(s.hand, *s.query, params, FilterOptions{true});
+  filter.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
   Eigen::VectorXd q = s.q;
   const Eigen::VectorXd& tau = s.tau;
   long k = 0, contacts = 0, constraints = 0;

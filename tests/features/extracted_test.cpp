@@ -72,8 +72,8 @@ TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
   BulletContactQuery query(hand, p.object);
   FilterParams params;
   params.pixel_sigma = 1.5;
-  Filter filter(hand, query, params, false);
-  filter.Reset(T_est, Eigen::VectorXd::Zero(hand.num_q()), 0.02, 0.087, 0.0);
+  Filter filter(hand, query, params, FilterOptions{false});
+  filter.Reset(T_est, Eigen::VectorXd::Zero(hand.num_q()), StartSigmas{0.02, 0.087, 0.0, {}});
   const double before = (T_est.translation() - T_true.translation()).norm();
   const double rot_before = RotationDistance(T_est.linear(), T_true.linear());
   EXPECT_GE(filter.UpdateVisual(features, p.T_PC, p.K), 6);

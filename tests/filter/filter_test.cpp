@@ -61,8 +61,8 @@ struct FingerScene {
 
   // A filter on this finger, started at T0 with the paper's initial σ (20 mm, 5°) and exact joints.
   Filter Started(const Transform& T0, const FilterParams& params, bool torque) {
-    Filter f(hand, query, params, torque);
-    f.Reset(T0, q0, 0.02, 0.087, 1e-9);
+    Filter f(hand, query, params, FilterOptions{torque});
+    f.Reset(T0, q0, StartSigmas{0.02, 0.087, 1e-9, {}});
     return f;
   }
 
@@ -220,9 +220,9 @@ TEST(Filter, JointBiasConvergesWhenAContactConstrainsIt) {
   ASSERT_NEAR(s.Distance(q_true, T_PO), 0.0, 1e-9);
   const Eigen::Vector2d tau = s.Torque(q_true, c_f, 5.0 * n);
 
-  Filter filter(s.hand, s.query, PerfectContacts(), true);  // the rate below is for 1 mm
+  Filter filter(s.hand, s.query, PerfectContacts(), FilterOptions{true});  // the rate below is for 1 mm
   // The object pose is known; j1 is accurate, j2's bias is uncertain (5°).
-  filter.Reset(T_PO, s.q0, 1e-6, 1e-6, Eigen::Vector2d(1e-9, 5.0 * M_PI / 180));
+  filter.Reset(T_PO, s.q0, StartSigmas{1e-6, 1e-6, 0.0, Eigen::Vector2d(1e-9, 5.0 * M_PI / 180)});
   const double sigma0 = std::sqrt(filter.covariance()(7, 7));
   // The same constraint every step: σ(b2) shrinks like 1/√k and the estimate closes the gap.
   for (int k = 0; k < 100; ++k) {
@@ -243,6 +243,25 @@ Eigen::VectorXd Clamp(const HandModel& hand, Eigen::VectorXd q) {
   return q;
 }
 
+// The camera of the visual tests: 0.4 m from p, z towards it, y roughly down.
+Transform CameraLookingAt(const Vec3& p) {
+  const Vec3 eye(0.05, -0.3, 0.25);
+  const Vec3 z = (p - eye).normalized();
+  const Vec3 x = z.cross(Vec3(0, 0, -1)).normalized();
+  Mat3 Rc;
+  Rc << x, z.cross(x), z;
+  return MakeTransform(eye, Rc);
+}
+
+Intrinsics TestIntrinsics() {
+  Intrinsics K;
+  K.fx = 600;
+  K.fy = 590;
+  K.cx = 320;
+  K.cy = 240;
+  return K;
+}
+
 // The project's hand closed around the ketchup bottle (fingers flexed to touch it roughly).
 struct GraspScene {
   HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
@@ -256,8 +275,8 @@ TEST(Filter, CovarianceStaysSymmetricPositiveDefiniteOver10000Steps) {
   GraspScene s;
   FilterParams params;
   params.contact_iterations = 2;
-  Filter filter(s.hand, s.query, params, true);
-  filter.Reset(s.T_PO, s.q, 0.02, 0.087, 0.087);
+  Filter filter(s.hand, s.query, params, FilterOptions{true});
+  filter.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
   std::normal_distribution<double> noise(0.0, 1.0);
   Eigen::VectorXd q = s.q;
   int with_contacts = 0;
@@ -282,28 +301,63 @@ TEST(Filter, CovarianceStaysSymmetricPositiveDefiniteOver10000Steps) {
   EXPECT_GT(with_contacts, 1000);  // the run exercised the updates
 }
 
+// Joint-rate steps and, every tenth step, a visual update of 60 features: nothing is allocated
+// after warm-up, with the camera pose's error in the state and without.
 TEST(Filter, StepAllocatesNothingAfterWarmUp) {
+  for (const double camera_sigma : {0.0, 0.002}) {
+    GraspScene s;
+    FilterParams params;
+    params.contact_iterations = 3;
+    params.camera_position_sigma = camera_sigma;
+    Filter filter(s.hand, s.query, params, FilterOptions{true});
+    filter.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
+    const Intrinsics K = TestIntrinsics();
+    const Transform T_PC = CameraLookingAt(s.T_PO.translation());
+    std::vector<VisualFeature> features;
+    for (int i = 0; i < 60; ++i) {
+      const Vec3 x_O(0.02 * std::cos(0.7 * i), 0.02 * std::sin(1.3 * i), 0.05 * std::cos(2.1 * i));
+      features.push_back({i, x_O, K.Project(T_PC.inverse() * (s.T_PO * x_O)) + Vec2(0.5, -0.3)});
+    }
+    Eigen::VectorXd q = s.q, tau = Eigen::VectorXd::Constant(16, 0.5);
+    const auto step = [&](int k) {
+      q.array() += (k % 2 ? -1e-4 : 1e-4);
+      filter.Predict(q, 0.001);
+      filter.UpdateContacts(tau);
+      return k % 10 == 0 ? filter.UpdateVisual(features, T_PC, K) : 0;
+    };
+    for (int k = 0; k < 20; ++k) step(k);
+    const long before = test::AllocationCount();
+    int constraints = 0, used = 0;
+    for (int k = 0; k < 100; ++k) {
+      used += step(k);
+      constraints += filter.trace().num_constraints;
+    }
+    EXPECT_EQ(test::AllocationCount() - before, 0) << "camera sigma " << camera_sigma;
+    EXPECT_GT(constraints, 0);
+    EXPECT_GT(used, 100);  // the visual updates fused features
+  }
+}
+
+// A saved state restored into another filter of the same hand continues bit-identically.
+TEST(Filter, RestoredStateContinuesBitIdentically) {
   GraspScene s;
   FilterParams params;
-  params.contact_iterations = 3;
-  Filter filter(s.hand, s.query, params, true);
-  filter.Reset(s.T_PO, s.q, 0.02, 0.087, 0.087);
+  params.camera_position_sigma = 0.002;
+  Filter a(s.hand, s.query, params, FilterOptions{true}), b(s.hand, s.query, params, FilterOptions{true});
+  a.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
+  b.Reset(s.T_PO * MakeTransform(Vec3(0.01, 0, 0), Mat3::Identity()), s.q, StartSigmas{0.03, 0.1, 0.1, {}});
   Eigen::VectorXd q = s.q, tau = Eigen::VectorXd::Constant(16, 0.5);
-  for (int k = 0; k < 20; ++k) {
-    q.array() += 1e-4;
-    filter.Predict(q, 0.001);
-    filter.UpdateContacts(tau);
-  }
-  const long before = test::AllocationCount();
-  int constraints = 0;
-  for (int k = 0; k < 100; ++k) {
-    q.array() += (k % 2 ? -1e-4 : 1e-4);
-    filter.Predict(q, 0.001);
-    filter.UpdateContacts(tau);
-    constraints += filter.trace().num_constraints;
-  }
-  EXPECT_EQ(test::AllocationCount() - before, 0);
-  EXPECT_GT(constraints, 0);
+  const auto step = [&](Filter& f, int k) {
+    f.Predict(q.array() + 1e-4 * (k % 3), 0.001);
+    f.UpdateContacts(tau);
+  };
+  for (int k = 0; k < 30; ++k) step(a, k);
+  b.Restore(a.state());
+  for (int k = 30; k < 60; ++k) step(a, k), step(b, k);
+  EXPECT_EQ(a.T_PO().matrix(), b.T_PO().matrix());
+  EXPECT_EQ(a.state().P, b.state().P);
+  EXPECT_EQ(a.biases(), b.biases());
+  EXPECT_EQ(a.trace().contacts.size(), b.trace().contacts.size());
 }
 
 TEST(Filter, PredictionMovesAGraspedObjectWithTheFingers) {
@@ -423,25 +477,6 @@ TEST(FilterJacobians, ContactMeasurementJacobianMatchesFiniteDifferences) {
   }
 }
 
-// The camera of the visual tests: 0.4 m from p, z towards it, y roughly down.
-Transform CameraLookingAt(const Vec3& p) {
-  const Vec3 eye(0.05, -0.3, 0.25);
-  const Vec3 z = (p - eye).normalized();
-  const Vec3 x = z.cross(Vec3(0, 0, -1)).normalized();
-  Mat3 Rc;
-  Rc << x, z.cross(x), z;
-  return MakeTransform(eye, Rc);
-}
-
-Intrinsics TestIntrinsics() {
-  Intrinsics K;
-  K.fx = 600;
-  K.fy = 590;
-  K.cx = 320;
-  K.cy = 240;
-  return K;
-}
-
 // ∂pix/∂e at e = 0 by central differences, pix: 6-vector -> pixel.
 template <typename Pixel>
 Eigen::Matrix<double, 2, 6> CentralDifferences(const Pixel& pix) {
@@ -546,8 +581,8 @@ TEST(Filter, TheCameraErrorIsEstimatedAndKeptAcrossFrames) {
   params.pixel_sigma = 1.0;
   params.camera_position_sigma = 0.002;
   params.camera_orientation_sigma = 0.5 * M_PI / 180;
-  Filter f(s.hand, s.query, params, false);
-  f.Reset(At(p), s.q0, 1e-6, 1e-6, 1e-9);
+  Filter f(s.hand, s.query, params, FilterOptions{false});
+  f.Reset(At(p), s.q0, StartSigmas{1e-6, 1e-6, 1e-9, {}});
   EXPECT_EQ(f.UpdateVisual(features, T_PC, K), 40);
   // At 0.4 m a 1.5 mm shift and a 0.2 deg turn of the camera look alike: ξ is some mix of both.
   EXPECT_GT(f.camera_error().head<3>().dot(offset) / offset.norm() + 0.4 * f.camera_error().tail<3>().norm(), 0.001);

@@ -32,11 +32,12 @@ class TwistSolver {
 
 // The contact measurement h = c_f - c_o and its Jacobian w.r.t. the error state
 // δ = (δp, δθ, δb): H = [ -A_i(c_o) , J_f ] (J_f: 3×m point Jacobian of c_f on its link).
+// H may have more columns (an augmented state); those are left as they are.
 template <typename JacobianIn, typename JacobianOut>
 void ContactMeasurementJacobian(const Vec3& c_o_P, const Vec3& p_PO, const JacobianIn& J_f,
                                 JacobianOut& H) {
   H.template leftCols<6>() = -GraspMapBlock(c_o_P, p_PO);
-  H.rightCols(J_f.cols()) = J_f;
+  H.middleCols(6, J_f.cols()) = J_f;  // columns past the biases (camera error) untouched
 }
 
 // The pixel p̄ of an object point X (palm frame) seen by a camera at T_PC, differentiated w.r.t.

@@ -1,10 +1,11 @@
 #pragma once
 // The error-state EKF of estimator-math.md: mean (p, R, b), error δ = (δp, δθ, δb) ∈ R^(6+m),
-// R = Exp(δθ) R̂. Predict maps finger motion to object motion through the grasp map of the
-// active contacts; UpdateContacts removes penetrations and adds torque-confirmed contacts;
-// UpdateVisual (visual features) aligns the object with pixels. Every update goes through one
-// generic, sequential, Joseph-form block update with gating and one retraction per step.
-// Sized once from the model: a step allocates nothing after warm-up.
+// R = Exp(δθ) R̂ (plus the camera pose's error ξ when it is estimated). Predict maps finger
+// motion to object motion through the grasp map of the active contacts; UpdateContacts removes
+// penetrations and adds torque-confirmed contacts; UpdateVisual aligns the object with pixels.
+// Each measurement source fills residual, Jacobian, noise and gate for one generic, sequential,
+// Joseph-form block update with one retraction per step. Sized once from the model: a step
+// allocates nothing after warm-up.
 #include <Eigen/Cholesky>
 #include <vector>
 
@@ -66,54 +67,101 @@ struct VisualFeature {
   Vec2 pixel = Vec2::Zero();        // measured pixel, undistorted [px]
 };
 
+// The standard deviations the filter starts with (estimator-math.md, "Initialisation").
+struct StartSigmas {
+  double position = 0.020;                 // [m] per axis
+  double orientation = 5.0 * M_PI / 180;   // [rad] per axis
+  double bias = 5.0 * M_PI / 180;          // [rad] every joint bias, unless bias_per_joint is set
+  Eigen::VectorXd bias_per_joint;          // [rad] one per joint (empty: `bias` for every joint)
+};
+
+struct FilterOptions {
+  bool use_torque = false;  // torque contacts (modality t)
+};
+
+// A contact that moves the object with its finger in Predict: its point fixed on the link.
+struct ActiveContact {
+  int link = -1;
+  Vec3 c_f_L = Vec3::Zero();
+};
+
+// Everything the filter carries from one step to the next, as plain data: saving it and
+// restoring it later continues bit-identically (the tracker's checkpoints, the GUI's seeking).
+// The error state is δ = (δp, δθ, δb[, ξ]): ξ, the camera pose's error, only when a camera σ
+// is set; P covers all of it.
+struct FilterState {
+  Vec3 p = Vec3::Zero();          // object position in the palm frame [m]
+  Mat3 R = Mat3::Identity();      // object orientation
+  Eigen::VectorXd b;              // joint biases [rad]
+  Vec6 xi = Vec6::Zero();         // camera pose error (v, ω), T_PC_true = T_PC Exp(ξ)
+  Eigen::MatrixXd P;              // covariance of δ
+  Eigen::VectorXd q_prev;         // the last measured joints
+  Eigen::VectorXd q_eff;          // q_prev + b: where the kinematics were last evaluated
+  bool have_prev = false;
+  double grip = 0.0;              // [N m] Σ|τ| of the last contact update
+  double max_grip = 0.0;          // [N m] its largest value since Reset
+  std::vector<ActiveContact> active;
+  FilterTrace trace;              // what the last step decided
+};
+
 class Filter {
  public:
-  // `contacts` must outlive the filter. `use_torque` enables torque contacts (modality jt).
-  Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams& params, bool use_torque);
+  // `contacts` must outlive the filter.
+  Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams& params,
+         const FilterOptions& options = {});
 
   // Starts from T_PO with the given standard deviations; biases start at zero.
   void Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd>& q_meas,
-             double sigma_position, double sigma_orientation, double sigma_bias);
-  void Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd>& q_meas,
-             double sigma_position, double sigma_orientation,
-             const Eigen::Ref<const Eigen::VectorXd>& sigma_bias);
+             const StartSigmas& sigmas = {});
 
   // Moves the object with the fingers from the previous q_meas to this one over dt seconds.
   void Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt);
   // Kinematic and (if enabled) torque contacts at the current estimate.
   void UpdateContacts(const Eigen::Ref<const Eigen::VectorXd>& tau);
-  // Pixels of object points seen by a camera at T_PC. Returns the number of features used.
+  // Pixels of object points seen by a camera at T_PC (tag corners, extracted features). Returns
+  // the number of features used. Allocates nothing once the trace has room for the features.
   int UpdateVisual(const std::vector<VisualFeature>& features, const Transform& T_PC,
                    const Intrinsics& K);
 
   Transform T_PO() const;
-  const Vec3& position() const { return p_; }
-  const Mat3& rotation() const { return R_; }
-  const Eigen::VectorXd& biases() const { return b_; }
+  const Vec3& position() const { return s_.p; }
+  const Mat3& rotation() const { return s_.R; }
+  const Eigen::VectorXd& biases() const { return s_.b; }
   // The camera pose's estimated error (v, ω), T_PC_true = T_PC Exp(ξ); zero unless camera σ > 0.
-  const Vec6& camera_error() const { return xi_; }
-  const Eigen::MatrixXd& covariance() const { return P_; }
-  const FilterTrace& trace() const { return trace_; }
-  FilterTrace& mutable_trace() { return trace_; }
+  const Vec6& camera_error() const { return s_.xi; }
+  // Covariance of (δp, δθ, δb) (dim() × dim()).
+  Eigen::Block<const Eigen::MatrixXd> covariance() const { return s_.P.topLeftCorner(n_, n_); }
+  const FilterTrace& trace() const { return s_.trace; }
   const FilterParams& params() const { return params_; }
+  const FilterOptions& options() const { return options_; }
   const KinematicsData& kinematics() const { return kin_; }  // at q_meas + b of the last update
   int dim() const { return n_; }
 
-  // The generic block update: residual r (D), Jacobian H (D × n) at the current linearisation
-  // point, noise R (D × D). Sequential: r is corrected by the not yet applied correction.
-  // Returns false when gated (chi2 > gate, gate > 0) or numerically unusable.
-  template <int D>
-  bool UpdateBlock(const Eigen::Matrix<double, D, 1>& r, const Eigen::Matrix<double, D, Eigen::Dynamic>& H,
-                   const Eigen::Matrix<double, D, D>& R, double gate_chi2, double* mahalanobis);
-  // Applies the accumulated correction (retraction on SO(3)) and clears it.
-  void Commit();
+  const FilterState& state() const { return s_; }
+  // Continues from a state saved from a filter of the same hand and parameters. Allocates
+  // nothing when this filter's state already has the sizes (every state of one filter has).
+  void Restore(const FilterState& state);
 
  private:
-  struct Active {
-    int link;
-    Vec3 c_f_L;  // contact point in the link frame
-  };
+  // The generic block update (every measurement source ends here): residual r = z - h(x̂)
+  // (D rows), Jacobian H (D × the whole error state, zeros where the source sees nothing),
+  // noise R, gate (χ², 0: none). Sequential: r is corrected by the not yet applied correction;
+  // Joseph form; nothing is applied to the mean until Commit.
+  enum class Outcome { kApplied, kGated, kNumeric };
+  template <int D>
+  Outcome Update(const Eigen::Matrix<double, D, 1>& r, const Eigen::Matrix<double, D, Eigen::Dynamic>& H,
+                 const Eigen::Matrix<double, D, D>& R, double gate_chi2, double* mahalanobis);
+  // Applies the accumulated correction (retraction on SO(3)) and clears it.
+  void Commit();
+  void RefreshKinematics();
+
+  // Measurement sources, one file each (src/): kinematic_contacts.cpp, torque_contacts.cpp,
+  // contact_constraint.cpp (the constraint both kinds of contact apply), visual_features.cpp.
   void ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int iteration);
+  void EstimateContactForces(const Eigen::Ref<const Eigen::VectorXd>& tau);
+  ContactKind ClassifyTorqueContact(std::size_t candidate, FilterTrace::Contact& rec) const;
+  bool ApplyContactConstraint(const ContactPair& pair, const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
+                              FilterTrace::Contact& rec);
   double CandidateWeight(double distance) const;
   // inv_weight_[i] = 1 / weight of candidate i relative to its finger's nearest candidate.
   void ComputeCandidateWeights();
@@ -121,30 +169,14 @@ class Filter {
   const HandModel& hand_;
   ContactQuery& contacts_;
   FilterParams params_;
-  bool use_torque_;
-  int m_, n_;
+  FilterOptions options_;
+  bool camera_state_ = false;  // ξ is part of the state (camera σ > 0)
+  int m_, n_, na_;             // joints; pose + biases; + camera error
 
-  Vec3 p_ = Vec3::Zero();
-  Mat3 R_ = Mat3::Identity();
-  Eigen::VectorXd b_;
-  Eigen::MatrixXd P_;
-  Eigen::VectorXd delta_;  // accumulated, not yet applied correction
-  // The camera pose's error ξ = (v, ω), T_PC_true = T_PC Exp(ξ), when camera σ > 0: a state
-  // kept beside the others (its covariance Pcc_, its cross-covariance with them Pxc_), seen by
-  // the visual update only, constant over time.
-  bool camera_state_ = false;
-  Vec6 xi_ = Vec6::Zero(), dxi_ = Vec6::Zero();
-  Eigen::Matrix<double, Eigen::Dynamic, 6> Pxc_;
-  Eigen::Matrix<double, 6, 6> Pcc_ = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::VectorXd q_prev_, q_eff_;
-  bool have_prev_ = false;
-  double grip_ = 0.0;      // [N m] Σ|τ| of the last contact update
-  double max_grip_ = 0.0;  // [N m] its largest value since Reset
-
+  FilterState s_;
+  Eigen::VectorXd delta_;  // accumulated, not yet applied correction (na_)
   KinematicsData kin_;
   std::vector<ContactPair> pairs_;
-  std::vector<Active> active_;
-  FilterTrace trace_;
 
   // Work buffers, sized once.
   Eigen::Matrix<double, 3, Eigen::Dynamic> J_, H3_, HP3_, SKt3_;
@@ -156,6 +188,7 @@ class Filter {
   std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> Jc_;  // per candidate
   std::vector<double> inv_weight_;                            // per candidate
   std::vector<double> finger_nearest_;                        // per joint: nearest candidate
+  bool torque_forces_ = false;                                // y_ holds this step's solve
   Eigen::MatrixXd JtJ_;
   Eigen::VectorXd y_, dq_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
