@@ -25,7 +25,8 @@
 #include <iostream>
 
 #include "inhand/app/match_pictures.hpp"
-#include "inhand/app/pipeline.hpp"
+#include "inhand/app/frame_composer.hpp"
+#include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/renderer/image_io.hpp"
 
@@ -157,7 +158,7 @@ struct GuiState {
   bool editing_time = false;  // while typing, the field does not follow the replay
   FrameComposer::Orbit orbit;
   OverlayLayers layers;
-  FilterParams params;
+  TrackerParams params;
   char params_path[512] = "params.json";
   std::deque<Action> actions;
   std::string status;
@@ -170,7 +171,7 @@ class Runner {
  public:
   Runner(Session& session, GuiState& state) : session_(session), state_(state) { Restart(); }
   void Restart() {
-    pipeline_ = std::make_unique<Pipeline>(session_, state_.params);
+    pipeline_ = std::make_unique<SessionPlayer>(session_, state_.params);
     composer_ = std::make_unique<FrameComposer>(*pipeline_);
     next_ = 0;
     last_frame_ = -1;
@@ -233,13 +234,13 @@ class Runner {
   }
   int sample() const { return next_ - 1; }
   int frame() const { return last_frame_; }
-  const Pipeline& pipeline() const { return *pipeline_; }
+  const SessionPlayer& pipeline() const { return *pipeline_; }
   Session& session() { return session_; }
 
  private:
   Session& session_;
   GuiState& state_;
-  std::unique_ptr<Pipeline> pipeline_;
+  std::unique_ptr<SessionPlayer> pipeline_;
   std::unique_ptr<FrameComposer> composer_;
   int next_ = 0;
   int last_frame_ = -1;
@@ -247,7 +248,7 @@ class Runner {
   // images (a few MB): every 250 samples (0.5 s at 500 Hz), at most ~50 per session.
   int CheckpointEvery() const { return std::max(250, session_.num_samples() / 50); }
   struct RunnerCheckpoint {
-    Pipeline::Checkpoint pipeline;
+    SessionPlayer::Checkpoint pipeline;
     int last_frame;
   };
   std::map<int, RunnerCheckpoint> checkpoints_;
@@ -301,7 +302,7 @@ void ApplyActions(Runner& runner, GuiState& state) {
       }
       case ActionKind::kSaveParams: {
         std::ofstream out(state.params_path);
-        out << FilterParamsToJson(state.params) << "\n";
+        out << TrackerParamsToJson(state.params) << "\n";
         state.status = out ? std::string("saved ") + state.params_path + " (replay --params accepts it)" : "cannot write " + std::string(state.params_path);
         break;
       }
@@ -322,7 +323,7 @@ constexpr float kPanelWidth = 330.0f;
 
 void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
   const Session& s = runner.session();
-  const Pipeline& p = runner.pipeline();
+  const SessionPlayer& p = runner.pipeline();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(height)));
   ImGui::Begin("inhand", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse);
@@ -358,20 +359,20 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   if (changed) state.pictures_dirty = true;
   ImGui::Separator();
   ImGui::Text("Filter parameters");
-  float sigma_mm = static_cast<float>(state.params.contact_sigma * 1000);
-  if (ImGui::SliderFloat("contact sigma [mm]", &sigma_mm, 0.1f, 20.0f)) state.params.contact_sigma = sigma_mm / 1000.0;
-  float force = static_cast<float>(state.params.force_min);
-  if (ImGui::SliderFloat("force min [N]", &force, 0.0f, 10.0f)) state.params.force_min = force;
-  float cone = static_cast<float>(state.params.friction_cone_deg);
-  if (ImGui::SliderFloat("friction cone [deg]", &cone, 5.0f, 90.0f)) state.params.friction_cone_deg = cone;
-  float pixel = static_cast<float>(state.params.pixel_sigma);
-  if (ImGui::SliderFloat("pixel sigma [px]", &pixel, 0.5f, 10.0f)) state.params.pixel_sigma = pixel;
-  float camera_mm = static_cast<float>(state.params.camera_position_sigma * 1000);
-  if (ImGui::SliderFloat("camera sigma [mm]", &camera_mm, 0.0f, 10.0f)) state.params.camera_position_sigma = camera_mm / 1000.0;
-  float camera_deg = static_cast<float>(state.params.camera_orientation_sigma * 180 / M_PI);
-  if (ImGui::SliderFloat("camera sigma [deg]", &camera_deg, 0.0f, 3.0f)) state.params.camera_orientation_sigma = camera_deg * M_PI / 180;
-  ImGui::SliderInt("contact iterations", &state.params.contact_iterations, 1, 5);
-  ImGui::Checkbox("normal-only contacts", &state.params.contact_normal_only);
+  float sigma_mm = static_cast<float>(state.params.filter.contact_sigma * 1000);
+  if (ImGui::SliderFloat("contact sigma [mm]", &sigma_mm, 0.1f, 20.0f)) state.params.filter.contact_sigma = sigma_mm / 1000.0;
+  float force = static_cast<float>(state.params.filter.force_min);
+  if (ImGui::SliderFloat("force min [N]", &force, 0.0f, 10.0f)) state.params.filter.force_min = force;
+  float cone = static_cast<float>(state.params.filter.friction_cone_deg);
+  if (ImGui::SliderFloat("friction cone [deg]", &cone, 5.0f, 90.0f)) state.params.filter.friction_cone_deg = cone;
+  float pixel = static_cast<float>(state.params.filter.pixel_sigma);
+  if (ImGui::SliderFloat("pixel sigma [px]", &pixel, 0.5f, 10.0f)) state.params.filter.pixel_sigma = pixel;
+  float camera_mm = static_cast<float>(state.params.filter.camera_position_sigma * 1000);
+  if (ImGui::SliderFloat("camera sigma [mm]", &camera_mm, 0.0f, 10.0f)) state.params.filter.camera_position_sigma = camera_mm / 1000.0;
+  float camera_deg = static_cast<float>(state.params.filter.camera_orientation_sigma * 180 / M_PI);
+  if (ImGui::SliderFloat("camera sigma [deg]", &camera_deg, 0.0f, 3.0f)) state.params.filter.camera_orientation_sigma = camera_deg * M_PI / 180;
+  ImGui::SliderInt("contact iterations", &state.params.filter.contact_iterations, 1, 5);
+  ImGui::Checkbox("normal-only contacts", &state.params.filter.contact_normal_only);
   if (ImGui::Button("Recompute from the start")) state.actions.push_back({ActionKind::kRecompute});
   ImGui::InputText("file", state.params_path, sizeof(state.params_path));
   if (ImGui::Button("Save parameters")) state.actions.push_back({ActionKind::kSaveParams});
@@ -545,7 +546,7 @@ int RunGui(const GuiCommand& cmd) {
   if (cmd.width < 640 || cmd.height < 480) throw InputError("gui: the window must be at least 640x480");
   Session session = Session::Load(cmd.session);
   GuiState state;
-  if (!cmd.params.empty()) state.params = ReadFilterParams(cmd.params);
+  if (!cmd.params.empty()) state.params = ReadTrackerParams(cmd.params);
   if (cmd.time >= 0.0) {
     int k = 0;
     while (k + 1 < session.num_samples() && session.t(k + 1) <= cmd.time) ++k;

@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
   replay_cmd->add_option("SESSION", replay.session, "session directory")->required();
   replay_cmd->add_option("--out", replay.out, "output directory (replaced when complete)")->required();
   replay_cmd->add_option("--modalities", replay.modalities, "comma-separated sets: j (joints), jt (+ torques), jta (+ AprilTags), jtf (+ extracted features)");
-  replay_cmd->add_option("--params", replay.params, "filter parameters (JSON, as written to params.json)");
+  replay_cmd->add_option("--params", replay.params, "tracker parameters (JSON, as written to params.json)");
   replay_cmd->add_flag("--no-video", replay.no_video, "skip replay.mp4");
   replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");
 
@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
   inhand::app::GuiCommand gui;
   auto* gui_cmd = cli.add_subcommand("gui", "Interactive session (Dear ImGui) when a display exists; --screenshot renders offscreen");
   gui_cmd->add_option("SESSION", gui.session, "session directory")->required();
-  gui_cmd->add_option("--params", gui.params, "filter parameters (JSON)");
+  gui_cmd->add_option("--params", gui.params, "tracker parameters (JSON, as written to params.json)");
   gui_cmd->add_option("--frames", gui.frames, "quit after N frames");
   gui_cmd->add_option("--screenshot", gui.screenshot, "save the last frame as PNG");
   gui_cmd->add_option("--time", gui.time, "start at this session time [s]");

@@ -7,7 +7,7 @@
 
 #include "inhand/app/commands.hpp"
 #include "inhand/app/match_pictures.hpp"
-#include "inhand/app/pipeline.hpp"
+#include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/renderer/image_io.hpp"
@@ -24,14 +24,14 @@ int RunMatch(const MatchCommand& cmd) {
   const int frames = static_cast<int>(session.camera_frames().size());
   if (cmd.frame < 0 || cmd.frame >= frames)
     throw InputError("--frame " + std::to_string(cmd.frame) + " is out of range, the session has frames 0.." + std::to_string(frames - 1));
-  Pipeline pipeline(session, FilterParams(), ParseModalities("jtf"));
+  SessionPlayer pipeline(session, TrackerParams(), ParseModalities("jtf"));
   int k = 0;
   for (; k < session.num_samples(); ++k) {
     pipeline.Step(k);
     if (pipeline.last_frame() == cmd.frame) break;
   }
-  const Pipeline::FeatureStep& fs = pipeline.last_feature_step();
-  if (fs.frame != cmd.frame) throw InputError(cmd.session + ": frame " + std::to_string(cmd.frame) + " comes after the last joint sample");
+  const VisualStep& fs = pipeline.last_feature_step();
+  if (pipeline.last_frame() != cmd.frame || fs.sequence == 0) throw InputError(cmd.session + ": frame " + std::to_string(cmd.frame) + " comes after the last joint sample");
   const MatchResult& r = fs.match;
   const MatchDebug& d = r.debug;
 

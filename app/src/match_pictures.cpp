@@ -50,7 +50,7 @@ Image8 Difference(const Image8& a, const Image8& b) {
 
 }  // namespace
 
-MatchPictures DrawMatchPictures(const Image8& camera_image, const Pipeline::FeatureStep& fs) {
+MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs) {
   const MatchResult& r = fs.match;
   const MatchDebug& d = r.debug;
   MatchPictures out;

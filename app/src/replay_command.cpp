@@ -10,7 +10,8 @@
 #include <iomanip>
 
 #include "inhand/app/commands.hpp"
-#include "inhand/app/pipeline.hpp"
+#include "inhand/app/frame_composer.hpp"
+#include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/renderer/image_io.hpp"
@@ -53,9 +54,9 @@ struct SetStats {
 int RunReplay(const ReplayCommand& cmd) {
   if (cmd.out.empty()) throw InputError("replay: --out DIR is required");
   Session session = Session::Load(cmd.session);
-  FilterParams params;
-  if (!cmd.params.empty()) params = ReadFilterParams(cmd.params);
-  Pipeline pipeline(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
+  TrackerParams params;
+  if (!cmd.params.empty()) params = ReadTrackerParams(cmd.params);
+  SessionPlayer pipeline(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
   const std::vector<ModalitySet>& sets = pipeline.sets();
   const bool want_pictures = (!cmd.no_video || cmd.frames) && session.info().camera.has_value();
   std::unique_ptr<FrameComposer> composer;
@@ -132,7 +133,7 @@ int RunReplay(const ReplayCommand& cmd) {
                   {"camera_frames", frames.size()},
                   {"video", video ? "replay.mp4" : Json(nullptr)},
                   {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
-                  {"parameters", Json::parse(FilterParamsToJson(pipeline.params()))}};
+                  {"parameters", Json::parse(TrackerParamsToJson(pipeline.params()))}};
   Json per_set = Json::object();
   for (std::size_t i = 0; i < sets.size(); ++i) {
     const SetStats& st = stats[i];
@@ -164,7 +165,7 @@ int RunReplay(const ReplayCommand& cmd) {
   }
   summary["modalities"] = per_set;
   std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
-  std::ofstream(out / "params.json") << FilterParamsToJson(pipeline.params()) << "\n";
+  std::ofstream(out / "params.json") << TrackerParamsToJson(pipeline.params()) << "\n";
   out.Commit();
 
   std::cout << "replay of " << session.info().name << " (" << n << " samples, " << frames.size() << " frames) written to " << cmd.out << "\n";

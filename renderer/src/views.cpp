@@ -44,6 +44,17 @@ void AddObject(Scene& scene, const std::vector<int>& meshes, const Transform& T_
   }
 }
 
+Scene CameraScene(const HandMeshes& hand, const std::vector<Transform>& T_PL, const std::vector<int>& object,
+                  const Transform& T_PO, const Transform& T_PC, const Intrinsics& K, const Vec3& background) {
+  Scene scene;
+  scene.K = K;
+  scene.T_PC = T_PC;
+  scene.background = background;
+  AddHand(scene, hand, T_PL);
+  AddObject(scene, object, T_PO);
+  return scene;
+}
+
 Transform LookAt(const Vec3& eye, const Vec3& target, const Vec3& up) {
   const Vec3 z = (target - eye).normalized();
   Vec3 x = z.cross(up);

@@ -319,30 +319,24 @@ Transform Session::GroundTruthAt(double t) const {
   return MakeTransform((1.0 - w) * a.T_PO.translation() + w * b.T_PO.translation(), qa.slerp(w, qb));
 }
 
-void Session::MatchJoints(const HandModel& hand) {
+std::vector<int> Session::JointColumns(const HandModel& hand) const {
   const std::vector<std::string> names = hand.QNames();
-  std::vector<long> column(names.size(), -1);
+  std::vector<int> column(names.size(), -1);
   for (std::size_t c = 0; c < joint_names_.size(); ++c) {
     const auto it = std::find(names.begin(), names.end(), joint_names_[c]);
     if (it == names.end())
       throw InputError(Resolve("joints.csv") + ":1: joint '" + joint_names_[c] +
                        "' is not a moving, independent joint of " + hand.source);
-    column[static_cast<std::size_t>(it - names.begin())] = static_cast<long>(c);
+    column[static_cast<std::size_t>(it - names.begin())] = static_cast<int>(c);
   }
   for (std::size_t j = 0; j < names.size(); ++j)
     if (column[j] < 0)
       throw InputError(Resolve("joints.csv") + ":1: no column for joint '" + names[j] + "' of " +
                        hand.source + " (" + std::to_string(names.size()) + " joints expected)");
-  auto reorder = [&](auto& M) {
-    auto copy = M;
-    for (std::size_t j = 0; j < column.size(); ++j) M.col(static_cast<long>(j)) = copy.col(column[j]);
-  };
-  reorder(q_);
-  reorder(tau_);
-  joint_names_ = names;
+  return column;
 }
 
-SessionModels LoadSessionModels(Session& session, bool load_visual_meshes) {
+SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes) {
   PackageMap packages;
   for (const auto& [name, d] : session.info().packages) {
     const std::string resolved = session.Resolve(d);
@@ -355,8 +349,8 @@ SessionModels LoadSessionModels(Session& session, bool load_visual_meshes) {
   options.packages = packages;
   options.load_visual_meshes = load_visual_meshes;
   SessionModels models{LoadHandModel(session.Resolve(session.info().hand_urdf), options),
-                       LoadObjectModel(session.Resolve(session.info().object), packages)};
-  session.MatchJoints(models.hand);
+                       LoadObjectModel(session.Resolve(session.info().object), packages), {}};
+  models.joint_columns = session.JointColumns(models.hand);
   return models;
 }
 

@@ -101,10 +101,13 @@ TEST(Session, WriteReadRoundTripIsExact) {
   EXPECT_TRUE(fs::exists(path + "/truth/biases.json"));
   EXPECT_NE(ReadText(path + "/session.json").find("\"seed\": 7"), std::string::npos);
 
-  // Joints match the hand: columns reordered into the URDF's order.
+  // Joints match the hand by name; the session keeps the file's column order.
+  const std::vector<std::string> file_order = s.joint_names();
   const SessionModels models = LoadSessionModels(s, false);
-  EXPECT_EQ(s.joint_names(), models.hand.QNames());
-  EXPECT_EQ(s.q(3)[0], 0.01 * 15 + 1e-3 * 3 + 1.0 / 3.0);  // index_abduction, first in the URDF
+  EXPECT_EQ(s.joint_names(), file_order);
+  ASSERT_EQ(models.joint_columns.size(), 16u);
+  for (std::size_t j = 0; j < 16; ++j) EXPECT_EQ(s.joint_names()[static_cast<std::size_t>(models.joint_columns[j])], models.hand.QNames()[j]);
+  EXPECT_EQ(s.q(3)[models.joint_columns[0]], 0.01 * 15 + 1e-3 * 3 + 1.0 / 3.0);  // index_abduction, first in the URDF
   EXPECT_EQ(models.object.name, "ketchup_bottle");
 }
 

@@ -39,7 +39,7 @@ struct ReplayCommand {
   std::string session;
   std::string out;
   std::string modalities;  // "" = every set the session supports
-  std::string params;      // FilterParams JSON, "" = defaults
+  std::string params;      // TrackerParams JSON, "" = defaults
   bool no_video = false;
   bool frames = false;     // also write each annotated frame as PNG
 };

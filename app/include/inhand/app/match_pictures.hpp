@@ -1,7 +1,7 @@
 #pragma once
 // Pictures of every stage of the extracted-feature matching of one frame, shared by
 // `inhand match` and the GUI.
-#include "inhand/app/pipeline.hpp"
+#include "inhand/tracker/tracker.hpp"
 
 namespace inhand::app {
 
@@ -14,6 +14,6 @@ struct MatchPictures {
   Image8 difference;                    // |camera - virtual|
   Image8 stages;                        // the main ones in one 3x2 picture
 };
-MatchPictures DrawMatchPictures(const Image8& camera, const Pipeline::FeatureStep& step);
+MatchPictures DrawMatchPictures(const Image8& camera, const VisualStep& step);
 
 }  // namespace inhand::app

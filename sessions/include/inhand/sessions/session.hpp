@@ -67,9 +67,10 @@ class Session {
   // Ground truth at time t: linear in position, slerp in orientation; clamps at the ends.
   Transform GroundTruthAt(double t) const;
 
-  // Reorders the joint columns into `hand`'s configuration order. Throws InputError when a
-  // column names a joint the URDF does not have, or a joint of the hand has no column.
-  void MatchJoints(const HandModel& hand);
+  // For each of `hand`'s configuration entries (HandModel::QNames order), its column among
+  // joint_names(). Throws InputError when a column names a joint the URDF does not have, or a
+  // joint of the hand has no column. The session itself stays as it was read.
+  std::vector<int> JointColumns(const HandModel& hand) const;
 
  private:
   std::string dir_;
@@ -82,12 +83,13 @@ class Session {
 };
 
 // The hand and object a session refers to, loaded through io/ with the session's package map,
-// and the session's joints matched to the hand.
+// and the session's joint columns matched to the hand.
 struct SessionModels {
   HandModel hand;
   ObjectModel object;
+  std::vector<int> joint_columns;  // Session::JointColumns(hand)
 };
-SessionModels LoadSessionModels(Session& session, bool load_visual_meshes = true);
+SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes = true);
 
 // Writes a session into a temporary directory beside `dir` and renames it into place on
 // Commit(), so a failed run never leaves a half-written session. Destroying an uncommitted

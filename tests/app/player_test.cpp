@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "inhand/app/pipeline.hpp"
+#include "inhand/app/player.hpp"
 #include "inhand/sessions/session.hpp"
 
 #include "test_support.hpp"
@@ -8,26 +8,26 @@
 namespace inhand {
 namespace {
 
-using app::Pipeline;
+using app::SessionPlayer;
 
 // The GUI seeks back by restoring a checkpoint: the run from there must be bit-identical to the
 // uninterrupted one, for every modality set, across camera frames (tags and extracted features).
-TEST(Pipeline, CheckpointResumesBitIdentically) {
+TEST(SessionPlayer, CheckpointResumesBitIdentically) {
   test::TempDir dir;
   ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " + (dir / "session")).exit_code, 0);
   Session session = Session::Load(dir / "session");
-  Pipeline pipeline(session, FilterParams());
+  SessionPlayer pipeline(session, TrackerParams());
   ASSERT_EQ(pipeline.sets().size(), 4u);
   const int mid = 400, end = 900;  // 500 Hz joints, 10 Hz camera: ten frames in between
   for (int k = 0; k < mid; ++k) pipeline.Step(k);
-  const Pipeline::Checkpoint checkpoint = pipeline.Save();
+  const SessionPlayer::Checkpoint checkpoint = pipeline.Save();
   std::vector<std::vector<Transform>> first(pipeline.sets().size());
   std::vector<Eigen::MatrixXd> first_P;
   for (int k = mid; k < end; ++k) {
     pipeline.Step(k);
     for (std::size_t i = 0; i < pipeline.sets().size(); ++i) first[i].push_back(pipeline.last(i).T_PO);
   }
-  for (std::size_t i = 0; i < pipeline.sets().size(); ++i) first_P.push_back(pipeline.filter(i).covariance());
+  for (std::size_t i = 0; i < pipeline.sets().size(); ++i) first_P.push_back(pipeline.tracker(i).covariance());
 
   pipeline.Restore(checkpoint);
   int frames = 0;
@@ -40,7 +40,7 @@ TEST(Pipeline, CheckpointResumesBitIdentically) {
       ASSERT_EQ(a.matrix(), b.matrix()) << pipeline.sets()[i].name << " at sample " << k;
     }
   }
-  for (std::size_t i = 0; i < pipeline.sets().size(); ++i) EXPECT_EQ(first_P[i], pipeline.filter(i).covariance());
+  for (std::size_t i = 0; i < pipeline.sets().size(); ++i) EXPECT_EQ(first_P[i], pipeline.tracker(i).covariance());
   // The stretch replayed must hold camera frames, or the test would not cover the visual step.
   EXPECT_GE(frames, 8);
 }

@@ -1,0 +1,36 @@
+#pragma once
+// One modality set's estimate at one joint sample, and how it compares with the ground truth.
+#include <limits>
+
+#include "inhand/core/so3.hpp"
+#include "inhand/filter/contact_model.hpp"
+
+namespace inhand::app {
+
+struct EstimateRecord {
+  double t = 0.0;
+  Transform T_PO;
+  Vec3 sigma_position = Vec3::Zero();     // [m]
+  Vec3 sigma_orientation = Vec3::Zero();  // [rad]
+  Eigen::VectorXd biases;
+  double position_error = std::numeric_limits<double>::quiet_NaN();     // [m] when truth exists
+  double orientation_error = std::numeric_limits<double>::quiet_NaN();  // [rad]
+  // The same errors per axis of the true object frame (estimate − truth), so the degrees of
+  // freedom the fingers leave unobservable (along and about a bottle's axis) can be read apart.
+  Vec3 position_error_O = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());     // [m]
+  Vec3 orientation_error_O = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // [rad], R_gtᵀ R̂ = Exp(·)
+  double step_time_us = 0.0;
+  int constraints = 0;
+  int contacts = 0;
+  int gated = 0;            // measurement blocks rejected by a gate in this sample
+  double visual_mahalanobis = 0.0;  // mean over the features of the last visual update
+  double nees = std::numeric_limits<double>::quiet_NaN();  // 6-D pose error against P, when truth exists
+  double visual_ms = -1.0;  // last visual step (detection + update) when one ran at this sample
+  int visual_used = 0;      // features used by it
+};
+
+// Fills the errors against the true pose and the NEES of the pose against its covariance P
+// (6×6, the filter's error convention p = p̂ + δp, R = Exp(δθ) R̂).
+void CompareWithTruth(const Transform& truth, const Mat6& P, EstimateRecord& r);
+
+}  // namespace inhand::app

@@ -1,0 +1,65 @@
+#pragma once
+// Plays a recorded session into one Tracker per modality set (README, "The per-frame loop"):
+// each joint sample in the hand's joint order, then the camera frames captured by then, and
+// records every set's estimate and its comparison with the ground truth. Deterministic.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "inhand/app/evaluation.hpp"
+#include "inhand/app/modalities.hpp"
+#include "inhand/sessions/session.hpp"
+#include "inhand/tracker/tracker.hpp"
+
+namespace inhand::app {
+
+class SessionPlayer {
+ public:
+  // `sets` empty: every set the session supports (jta only when the object carries tags, jta and
+  // jtf only with camera images). The session must outlive the player.
+  SessionPlayer(const Session& session, const TrackerParams& params, std::vector<ModalitySet> sets = {});
+  int num_samples() const { return session_.num_samples(); }
+  // Feeds joint sample k to every tracker (k = 0 starts them), then the camera frames captured
+  // by it.
+  void Step(int k);
+  // The camera frame the last Step processed (-1: none) and its image.
+  int last_frame() const { return state_.last_frame; }
+  const Image8& last_image() const { return state_.image; }
+  // The last feature set's last visual step (virtual image, matches, residuals): for `match`
+  // and the GUI. Empty when no set uses extracted features.
+  const VisualStep& last_feature_step() const;
+
+  struct StepState {
+    std::vector<EstimateRecord> last;
+    std::size_t next_frame = 0;
+    int last_frame = -1;
+    Image8 image;
+  };
+  // Restoring a checkpoint and stepping on gives bit-identical estimates to an uninterrupted
+  // run, so the GUI seeks back from the nearest checkpoint instead of from the start.
+  struct Checkpoint {
+    std::vector<TrackerSnapshot> trackers;
+    StepState state;
+  };
+  Checkpoint Save() const;
+  void Restore(const Checkpoint& c);
+
+  const std::vector<ModalitySet>& sets() const { return sets_; }
+  const Tracker& tracker(std::size_t i) const { return *trackers_[i]; }
+  const EstimateRecord& last(std::size_t i) const { return state_.last[i]; }
+  const Session& session() const { return session_; }
+  const SessionModels& models() const { return models_; }
+  const TrackerParams& params() const { return params_; }
+
+ private:
+  const Session& session_;
+  SessionModels models_;
+  TrackerParams params_;
+  std::vector<ModalitySet> sets_;
+  std::vector<std::unique_ptr<Tracker>> trackers_;
+  StepState state_;
+  Eigen::VectorXd q_, tau_;  // joint sample k in the hand's order
+  VisualStep no_features_;
+};
+
+}  // namespace inhand::app

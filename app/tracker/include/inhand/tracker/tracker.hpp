@@ -1,0 +1,151 @@
+#pragma once
+// The online estimator a robot calls: one Tracker per modality set (joints, plus any of
+// torques, AprilTags, extracted features) over the filter, the feature extractors and the
+// renderer. Joint samples are fused at joint rate on the caller's thread; images are fused at
+// their capture time, also when they arrive after later joint samples: the tracker keeps a
+// checkpoint of the filter after every joint sample, goes back to the one before the capture
+// time, applies the visual update there and re-applies the joint samples since.
+//
+//   Tracker tracker(hand, object, Modalities{true, false, true}, params, options);
+//   tracker.Start(t0, T_PO_guess, StartSigmas{});
+//   loop: tracker.AddJointSample(t, q, tau);              // q, tau in hand.q_joints order
+//         tracker.AddImage(t_capture, image, T_PC, K);     // whenever a frame arrives
+//         use tracker.T_PO(), tracker.covariance()
+//
+// Threaded: AddImage hands the frame to a worker that detects, renders and matches off the
+// caller's thread, fuses it at its capture time into its own copy of the filter and re-applies
+// the samples since; the caller adopts the result at its next AddJointSample, so the joint rate
+// never waits for vision. Deterministic (threaded = false, the default): each image is
+// processed on the caller's thread when it is added; replays are bit-stable. Both give the same
+// estimates when images are added in capture order.
+//
+// Not thread-safe itself: call it from one thread. The hand and object must outlive it.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "inhand/core/hand_model.hpp"
+#include "inhand/core/image.hpp"
+#include "inhand/core/intrinsics.hpp"
+#include "inhand/core/object_model.hpp"
+#include "inhand/features/extracted.hpp"
+#include "inhand/features/tags.hpp"
+#include "inhand/filter/filter.hpp"
+#include "inhand/renderer/renderer.hpp"
+#include "inhand/tracker/tracker_params.hpp"
+
+namespace inhand {
+
+// Which measurements a tracker fuses besides the joint positions (always).
+struct Modalities {
+  bool torque = false;    // t: contacts confirmed by joint torques
+  bool tags = false;      // a: AprilTag corners
+  bool features = false;  // f: features extracted from the camera and the rendered image
+  std::string Name() const;  // "j", "jt", "jta", "jtf", "ja", "jf", "jtaf", ...
+};
+
+struct TrackerOptions {
+  bool threaded = false;           // vision on a worker thread (online use)
+  double horizon = 0.5;            // [s] images captured longer ago than this before the newest
+                                   // joint sample are dropped (counted), never fused
+  int history_samples = 2048;      // joint samples kept with their checkpoints (2 s at 1 kHz)
+  int max_queued_images = 2;       // threaded: images waiting for the worker; when more arrive
+                                   // the oldest waiting one is dropped (counted)
+};
+
+struct TrackerStats {
+  long samples = 0;                // joint samples fused
+  long samples_dropped = 0;        // not later than the previous one, or before the start
+  long images_added = 0;
+  long images_fused = 0;
+  long images_dropped_late = 0;    // captured beyond the horizon or before the first sample
+  long images_dropped_busy = 0;    // threaded: the worker was behind
+  long rewinds = 0;                // images fused before joint samples already fused
+  long samples_replayed = 0;       // joint samples re-applied after them
+};
+
+// What the last fused image showed and did, for overlays, the GUI and `inhand match`.
+struct VisualStep {
+  long sequence = 0;               // images fused so far (0: none yet)
+  double t_capture = 0.0;          // [s]
+  double ms = 0.0;                 // detection, rendering, matching and update(s) [ms]
+  int offered = 0;                 // features given to the update(s)
+  int used = 0;                    // of them, fused (not gated)
+  double mean_mahalanobis = 0.0;   // over the offered features
+  std::vector<TagDetection> tags;  // tag sets: the tags found
+  // Feature sets: the virtual image at the estimate, the matches with every stage's output,
+  // and for each feature offered to the update its match and pixel residual before and after.
+  bool has_features = false;
+  RenderOutput virtual_view;
+  MatchResult match;
+  std::vector<int> used_match;     // index into match.matches
+  std::vector<double> residual_before, residual_after;  // [px]
+};
+
+// One visual update as fused: the measurements of one image (its tag corners, or its
+// extracted features), kept so that an older image fused later can re-apply it after itself.
+struct VisualUpdate {
+  double t_capture = 0.0;
+  std::vector<VisualFeature> features;
+  Transform T_PC = Transform::Identity();
+  Intrinsics K;
+};
+
+// A tracker's state at one joint sample, to continue from later (the GUI seeks with these).
+struct TrackerSnapshot {
+  bool started = false;
+  double t = 0.0, dt = 0.0;
+  Eigen::VectorXd q, tau;
+  FilterState checkpoint;              // after the sample's contacts
+  std::vector<VisualUpdate> fused;     // the visual updates after it
+  FilterState filter;                  // after those
+  VisualStep visual;
+  TrackerStats stats;
+};
+
+class Tracker {
+ public:
+  Tracker(const HandModel& hand, const ObjectModel& object, const Modalities& modalities,
+          const TrackerParams& params, const TrackerOptions& options = {});
+  ~Tracker();
+  Tracker(const Tracker&) = delete;
+  Tracker& operator=(const Tracker&) = delete;
+
+  // The estimate to start from and its uncertainty; the first joint sample at or after t starts
+  // the filter there (earlier samples are dropped). Starting again discards the history.
+  void Start(double t, const Transform& T_PO, const StartSigmas& sigmas = {});
+  // A joint sample: positions and external torques (zeros without torque sensing), in the
+  // hand's configuration order. Samples not later than the previous one are dropped (counted).
+  void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& tau);
+  // A camera image (RGB or grey) captured at t_capture by a camera at T_PC (palm frame) with
+  // intrinsics K. Fused after the last joint sample at or before t_capture; an image captured
+  // after the newest sample waits for the samples up to its time.
+  void AddImage(double t_capture, const Image8& image, const Transform& T_PC, const Intrinsics& K);
+  // Threaded: blocks until every image whose capture time the joint samples have reached is
+  // fused or dropped, and adopts the result. Deterministic: returns at once.
+  void WaitForImages();
+
+  bool started() const;
+  double t() const;  // [s] of the newest joint sample
+  Transform T_PO() const;
+  Eigen::MatrixXd covariance() const;  // of (δp, δθ, δb)
+  const Eigen::VectorXd& biases() const;
+  const FilterTrace& trace() const;    // of the newest joint sample (and images fused at it)
+  const Filter& filter() const;
+  const VisualStep& last_visual() const;
+  TrackerStats stats() const;
+  const Modalities& modalities() const;
+  const TrackerParams& params() const;
+
+  TrackerSnapshot Save() const;
+  // Continues from a snapshot of a tracker of the same models and parameters; the history
+  // before it is gone (older images are dropped as late).
+  void Restore(const TrackerSnapshot& snapshot);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace inhand

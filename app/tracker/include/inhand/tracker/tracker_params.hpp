@@ -1,0 +1,31 @@
+#pragma once
+// Everything a Tracker is configured with, in one struct and one JSON file (`--params`): the
+// filter's parameters at the top level (as the files written before the tracker existed), the
+// tag detector's under "tags", the extracted features' under "features". Unknown fields are
+// errors that name the file and the field; every value is validated.
+#include <string>
+
+#include "inhand/features/extracted.hpp"
+#include "inhand/features/tags.hpp"
+#include "inhand/filter/params.hpp"
+
+namespace inhand {
+
+struct TrackerParams {
+  FilterParams filter;
+  TagDetectorParams tags;          // `family` is replaced by the object's tags' family unless
+  bool tag_family_from_object = true;  // the file names one (tag_family_from_object false)
+  bool tag_fine_search = true;     // search tags the decimated detection missed at full
+                                   // resolution where the estimate expects them
+  FeatureParams features;
+
+  // Throws InputError("SOURCE: parameter '...' is ..., expected ...").
+  void Validate(const std::string& source = "tracker parameters") const;
+};
+
+std::string TrackerParamsToJson(const TrackerParams& params);
+TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::string& source);
+// Reads a parameter file; InputError naming the file when it cannot be read or a field is wrong.
+TrackerParams ReadTrackerParams(const std::string& path);
+
+}  // namespace inhand

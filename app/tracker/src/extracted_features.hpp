@@ -1,0 +1,34 @@
+#pragma once
+// Extracted features as visual measurements: the scene as the filter believes it is rendered
+// from the camera (the virtual image), matched with the camera image (features/extracted.hpp:
+// Canny → Harris → contour pieces → Hough → RANSAC), and each inlier's virtual pixel taken back
+// to its point on the object through the virtual depth. The renderer is created on the thread
+// that first measures (OpenGL contexts belong to one thread); used on that thread only.
+#include <memory>
+#include <vector>
+
+#include "inhand/filter/filter.hpp"
+#include "inhand/renderer/views.hpp"
+#include "inhand/tracker/tracker.hpp"
+
+namespace inhand::tracker_detail {
+
+class ExtractedFeatures {
+ public:
+  ExtractedFeatures(const HandModel& hand, const ObjectModel& object, const FeatureParams& params);
+  ~ExtractedFeatures();
+  // Fills step.virtual_view, step.match and step.used_match, and `out`.
+  void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
+               VisualStep& step, std::vector<VisualFeature>& out);
+
+ private:
+  const HandModel& hand_;
+  const ObjectModel& object_;
+  FeatureParams params_;
+  std::unique_ptr<Renderer> renderer_;
+  HandMeshes hand_meshes_;
+  std::vector<int> object_meshes_;
+  std::vector<std::uint8_t> object_mask_, hand_mask_;
+};
+
+}  // namespace inhand::tracker_detail
