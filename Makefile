@@ -5,7 +5,7 @@ BUILD ?= build
 OUT ?= out/demo
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build demo test bench clean
+.PHONY: all deps configure build demo test bench sanitize fuzz clean
 
 all: build
 
@@ -27,5 +27,13 @@ test: build
 bench: build
 	bash scripts/bench.sh $(BUILD)
 
+# ASan + UBSan over every test but the benchmarks and the installed-tree checks (build-sanitize/).
+sanitize: deps
+	bash scripts/sanitize.sh
+
+# The mutation fuzzer over every parser, longer than in make test (INHAND_FUZZ_RUNS per target).
+fuzz: build
+	INHAND_FUZZ_RUNS=$${INHAND_FUZZ_RUNS:-20000} $(BUILD)/bin/fuzz_tests
+
 clean:
-	rm -rf $(BUILD) out
+	rm -rf $(BUILD) build-sanitize out

@@ -15,6 +15,9 @@ int RunCompare(const CompareCommand& cmd) {
     throw InputError("--max-bad-fraction is " + std::to_string(cmd.max_bad_fraction) + ", expected 0..1");
   const Image8 a = ReadImage(cmd.a);
   const Image8 b = ReadImage(cmd.b);
+  if (a.width != b.width || a.height != b.height || a.channels != b.channels)
+    throw InputError("compare: " + cmd.a + " is " + std::to_string(a.width) + "x" + std::to_string(a.height) + " px, " + cmd.b +
+                     " is " + std::to_string(b.width) + "x" + std::to_string(b.height) + " px: images of different sizes");
   const ImageDiff d = CompareImages(a, b, cmd.max_channel_delta);
   if (!cmd.diff.empty()) WriteImage(cmd.diff, d.heatmap);
   const bool match = d.bad_fraction <= cmd.max_bad_fraction;

@@ -18,6 +18,7 @@
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/overlay.hpp"
+#include "inhand/sessions/output_folder.hpp"
 #include "inhand/sessions/simulator.hpp"
 
 namespace fs = std::filesystem;
@@ -199,7 +200,11 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       if (std::find(known.begin(), known.end(), s) == known.end()) throw InputError("--scenarios: unknown scenario '" + s + "'");
       else scenarios.push_back(s);
   }
-  fs::create_directories(cmd.out);
+  // The evaluation folder collects runs (kept across --plan and --merge): it must be new, empty
+  // or an evaluation folder already.
+  const fs::path out_dir = CheckOutputFolder(cmd.out);
+  fs::create_directories(out_dir);
+  std::ofstream(out_dir / kOutputMarker) << "written by inhand evaluate\n";
   std::vector<std::pair<std::string, std::pair<std::string, int>>> runs;  // command, (scenario, seed)
   for (const std::string& s : scenarios)
     for (int seed = 1; seed <= cmd.seeds; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, cmd.keep_sessions), {s, seed}});

@@ -15,4 +15,14 @@ void CompareWithTruth(const Transform& gt, const Mat6& P, EstimateRecord& r) {
   r.nees = e.dot(P.ldlt().solve(e));
 }
 
+EstimateRecord WithoutTruth(EstimateRecord r) {
+  const EstimateRecord blank;
+  r.position_error = blank.position_error;
+  r.orientation_error = blank.orientation_error;
+  r.position_error_O = blank.position_error_O;
+  r.orientation_error_O = blank.orientation_error_O;
+  r.nees = blank.nees;
+  return r;
+}
+
 }  // namespace inhand::app

@@ -37,7 +37,7 @@ int RunMatch(const MatchCommand& cmd) {
 
   const MatchPictures pictures = DrawMatchPictures(pipeline.last_image(), fs);
 
-  StagedOutput out(cmd.out);
+  StagedOutput out(cmd.out, {cmd.session}, "match");
   {
     const std::vector<std::pair<std::string, const Image8*>> images = {
         {"camera.png", &pipeline.last_image()}, {"virtual.png", &fs.virtual_view.colour},

@@ -16,6 +16,8 @@ std::vector<ModalitySet> ParseModalities(const std::string& list) {
     else if (name == "jta") out.push_back({"jta", true, true, false, kColourTags});
     else if (name == "jtf") out.push_back({"jtf", true, false, true, kColourFeatures});
     else throw InputError("--modalities: unknown set '" + name + "', expected j, jt, jta or jtf");
+    for (std::size_t i = 0; i + 1 < out.size(); ++i)
+      if (out[i].name == name) throw InputError("--modalities: set '" + name + "' is listed twice");
   }
   if (out.empty()) throw InputError("--modalities: empty list");
   return out;

@@ -1,6 +1,8 @@
 #include "inhand/app/player.hpp"
 
 #include <chrono>
+#include <cmath>
+#include <sstream>
 
 #include "inhand/core/error.hpp"
 
@@ -25,6 +27,60 @@ SessionPlayer::SessionPlayer(const Session& session, const TrackerParams& params
   state_.last.resize(sets_.size());
   q_.setZero(models_.hand.num_q());
   tau_.setZero(models_.hand.num_q());
+
+  // The report of what will not be used.
+  const int n = session_.num_samples();
+  for (int k = 0; k < n; ++k) {
+    Gather(k);
+    const RejectedJoint r = ScreenJointSample(models_.hand, params_, q_, tau_);
+    if (r.joint >= 0) report_.rejected_samples.push_back({k, r.joint, r.torque, r.torque ? tau_[r.joint] : q_[r.joint]});
+  }
+  for (const CameraFrame& f : session_.camera_frames()) report_.frames_before_first_sample += n > 0 && f.t < session_.t(0) - 1e-9;
+  if (session_.has_groundtruth() && n > 0) {
+    report_.truth_from = session_.groundtruth().front().t;
+    report_.truth_to = session_.groundtruth().back().t;
+    for (int k = 0; k < n; ++k) report_.samples_without_truth += !TruthCovers(session_.t(k));
+  }
+}
+
+void SessionPlayer::Gather(int k) {
+  const auto q = session_.q(k), tau = session_.tau(k);
+  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) {
+    q_[static_cast<long>(j)] = q[models_.joint_columns[j]];
+    tau_[static_cast<long>(j)] = tau[models_.joint_columns[j]];
+  }
+}
+
+bool SessionPlayer::TruthCovers(double t) const {
+  return session_.has_groundtruth() && t >= session_.groundtruth().front().t - 1e-9 && t <= session_.groundtruth().back().t + 1e-9;
+}
+
+std::vector<std::string> SessionPlayer::InputReport::Warnings(const Session& session, const SessionModels& models,
+                                                              const TrackerParams& params) const {
+  std::vector<std::string> out;
+  const std::vector<std::string> names = models.hand.QNames();
+  for (std::size_t i = 0; i < rejected_samples.size() && i < 5; ++i) {
+    const Rejected& r = rejected_samples[i];
+    const Joint& joint = models.hand.joints[static_cast<std::size_t>(models.hand.q_joints[static_cast<std::size_t>(r.joint)])];
+    std::ostringstream line;
+    line << session.Resolve("joints.csv") << ":" << r.sample + 2 << ": " << (r.torque ? "tau:" : "q:") << names[static_cast<std::size_t>(r.joint)]
+         << " = " << r.value;
+    if (r.torque || !std::isfinite(r.value)) line << " is not a number";
+    else if (joint.has_limits) line << " is beyond its limits [" << joint.lower << ", " << joint.upper << "] by more than " << params.joint_limit_margin;
+    else line << " is beyond +-1000";
+    line << "; sample dropped";
+    out.push_back(line.str());
+  }
+  if (rejected_samples.size() > 5)
+    out.push_back(session.Resolve("joints.csv") + ": " + std::to_string(rejected_samples.size()) + " joint samples dropped in all");
+  if (frames_before_first_sample > 0)
+    out.push_back(session.Resolve("camera.csv") + ": " + std::to_string(frames_before_first_sample) +
+                  " frames captured before the first joint sample (t = " + FormatDouble(session.t(0)) + " s) are not fused");
+  if (samples_without_truth > 0)
+    out.push_back(session.Resolve("groundtruth.csv") + ": covers " + FormatDouble(truth_from) + " to " + FormatDouble(truth_to) +
+                  " s, not the joint samples' " + FormatDouble(session.t(0)) + " to " + FormatDouble(session.t(session.num_samples() - 1)) +
+                  " s: no errors for the " + std::to_string(samples_without_truth) + " samples outside it");
+  return out;
 }
 
 const VisualStep& SessionPlayer::last_feature_step() const {
@@ -48,11 +104,7 @@ void SessionPlayer::Restore(const Checkpoint& c) {
 
 void SessionPlayer::Step(int k) {
   const double t = session_.t(k);
-  const auto q = session_.q(k), tau = session_.tau(k);
-  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) {
-    q_[static_cast<long>(j)] = q[models_.joint_columns[j]];
-    tau_[static_cast<long>(j)] = tau[models_.joint_columns[j]];
-  }
+  Gather(k);
   for (std::size_t i = 0; i < trackers_.size(); ++i) {
     Tracker& tracker = *trackers_[i];
     const auto start = std::chrono::steady_clock::now();
@@ -97,7 +149,8 @@ void SessionPlayer::Step(int k) {
     r.sigma_orientation = P.diagonal().segment<3>(3).cwiseSqrt();
     r.biases = tracker.biases();
     r.gated = tracker.trace().num_gated;  // contacts and visual features of this sample
-    if (session_.has_groundtruth()) CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
+    if (TruthCovers(t)) CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
+    else r = WithoutTruth(r);
   }
 }
 

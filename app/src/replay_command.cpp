@@ -46,7 +46,7 @@ struct SetStats {
   double sq_pos = 0.0, sq_ori = 0.0;
   int with_truth = 0;
   long constraints = 0;
-  EstimateRecord last;
+  EstimateRecord last_with_truth;
 };
 
 }  // namespace
@@ -61,8 +61,10 @@ int RunReplay(const ReplayCommand& cmd) {
   const bool want_pictures = (!cmd.no_video || cmd.frames) && session.info().camera.has_value();
   std::unique_ptr<FrameComposer> composer;
   if (want_pictures) composer = std::make_unique<FrameComposer>(pipeline);
+  for (const std::string& w : pipeline.input_report().Warnings(session, pipeline.models(), pipeline.params()))
+    std::cerr << "inhand: warning: " << w << "\n";
 
-  StagedOutput out(cmd.out);
+  StagedOutput out(cmd.out, {cmd.session, cmd.params}, "replay");
   if (cmd.frames) fs::create_directories(out / "frames");
   std::ofstream csv(out / "estimates.csv");
   csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,position_error_mm,orientation_error_deg";
@@ -80,6 +82,11 @@ int RunReplay(const ReplayCommand& cmd) {
     pipeline.Step(k);
     for (std::size_t i = 0; i < sets.size(); ++i) {
       const EstimateRecord& r = pipeline.last(i);
+      // The filter lets nothing non-finite into its state; should it ever, no output pretends
+      // otherwise.
+      if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() || !r.sigma_orientation.allFinite())
+        throw InputError(cmd.session + ": set " + sets[i].name + " has a non-finite estimate at t = " + FormatDouble(r.t) +
+                         " s (a bug: please report it with this session)");
       const Quat q(r.T_PO.linear());
       const Vec3& p = r.T_PO.translation();
       csv << FormatDouble(r.t) << "," << sets[i].name;
@@ -99,8 +106,8 @@ int RunReplay(const ReplayCommand& cmd) {
         st.sq_pos += r.position_error * r.position_error;
         st.sq_ori += r.orientation_error * r.orientation_error;
         ++st.with_truth;
+        st.last_with_truth = r;
       }
-      st.last = r;
     }
     // The camera frame this sample processed, if any.
     if (const int frame = pipeline.last_frame(); frame >= 0) {
@@ -133,7 +140,10 @@ int RunReplay(const ReplayCommand& cmd) {
                   {"camera_frames", frames.size()},
                   {"video", video ? "replay.mp4" : Json(nullptr)},
                   {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
-                  {"parameters", Json::parse(TrackerParamsToJson(pipeline.params()))}};
+                  {"parameters", Json::parse(TrackerParamsToJson(pipeline.params()))},
+                  {"joint_samples_rejected", pipeline.input_report().rejected_samples.size()},
+                  {"frames_before_first_sample", pipeline.input_report().frames_before_first_sample},
+                  {"samples_without_truth", pipeline.input_report().samples_without_truth}};
   Json per_set = Json::object();
   for (std::size_t i = 0; i < sets.size(); ++i) {
     const SetStats& st = stats[i];
@@ -147,9 +157,10 @@ int RunReplay(const ReplayCommand& cmd) {
               {"features_used", st.features_used},
               {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
     if (st.with_truth > 0) {
-      s["terminal_position_error_mm"] = st.last.position_error * 1000;
-      s["terminal_orientation_error_deg"] = st.last.orientation_error * 180 / M_PI;
-      const Vec3 dp = st.last.position_error_O * 1000, dr = st.last.orientation_error_O * (180 / M_PI);
+      // At the last sample the ground truth covers.
+      s["terminal_position_error_mm"] = st.last_with_truth.position_error * 1000;
+      s["terminal_orientation_error_deg"] = st.last_with_truth.orientation_error * 180 / M_PI;
+      const Vec3 dp = st.last_with_truth.position_error_O * 1000, dr = st.last_with_truth.orientation_error_O * (180 / M_PI);
       s["terminal_position_error_object_axes_mm"] = {dp.x(), dp.y(), dp.z()};
       s["terminal_orientation_error_object_axes_deg"] = {dr.x(), dr.y(), dr.z()};
       s["rms_position_error_mm"] = std::sqrt(st.sq_pos / st.with_truth) * 1000;

@@ -1,25 +1,20 @@
 #pragma once
-// Internal to app: an output folder written under a hidden temporary name beside the target
-// and renamed into place by Commit(); destroyed uncommitted, it leaves nothing behind.
-#include <unistd.h>
-
+// Internal to app: an output folder written under a hidden staging name beside the target and
+// renamed into place by Commit(); destroyed uncommitted, it leaves nothing behind. Only what
+// inhand may replace is replaced (sessions/output_folder.hpp).
 #include <filesystem>
 #include <string>
+#include <vector>
 
-#include "inhand/core/error.hpp"
+#include "inhand/sessions/output_folder.hpp"
 
 namespace inhand::app {
 
 class StagedOutput {
  public:
-  explicit StagedOutput(const std::string& out) : final_(std::filesystem::absolute(out).lexically_normal()) {
-    if (final_.filename().empty()) final_ = final_.parent_path();
-    tmp_ = final_.parent_path() / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(tmp_);
-    std::error_code ec;
-    std::filesystem::create_directories(tmp_, ec);
-    if (ec) throw InputError(out + ": cannot create the output folder (" + ec.message() + ")");
-  }
+  // `inputs`: what the command reads (never replaced, nor their ancestors).
+  StagedOutput(const std::string& out, const std::vector<std::string>& inputs, std::string command)
+      : final_(CheckOutputFolder(out, inputs)), tmp_(PrepareStaging(final_)), command_(std::move(command)) {}
   ~StagedOutput() {
     std::error_code ec;
     if (!committed_) std::filesystem::remove_all(tmp_, ec);
@@ -28,13 +23,13 @@ class StagedOutput {
   StagedOutput& operator=(const StagedOutput&) = delete;
   std::filesystem::path operator/(const std::string& rel) const { return tmp_ / rel; }
   void Commit() {
-    std::filesystem::remove_all(final_);
-    std::filesystem::rename(tmp_, final_);
+    CommitStaging(tmp_, final_, command_);
     committed_ = true;
   }
 
  private:
   std::filesystem::path final_, tmp_;
+  std::string command_;
   bool committed_ = false;
 };
 

@@ -163,6 +163,11 @@ std::vector<TagDetection> TagDetector::Detect(const Image8& image, const PixelRe
                     std::min(region.y1, image.height)};
   if (r.empty()) return {};
   const int w = r.x1 - r.x0, h = r.y1 - r.y0;
+  // libapriltag's quad detection reads out of bounds (SIGSEGV) on images whose decimated height
+  // is under 3 px (1 x 2 at decimate 1, 100 x 4 at decimate 2: measured for decimate 1-4 on
+  // 1-24 px); no tag fits in fewer than 8 px anyway (tag16h5 is 8 modules wide).
+  const int minimum = std::max(8, static_cast<int>(std::ceil(2.0 * params_.decimate)) + 1);
+  if (w < minimum || h < minimum) return {};
   d.grey.resize(std::size_t(w) * h);
   for (int y = 0; y < h; ++y) {
     const std::uint8_t* row = image.pixel(r.x0, r.y0 + y);

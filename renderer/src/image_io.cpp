@@ -1,6 +1,13 @@
 #include "inhand/renderer/image_io.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -8,10 +15,61 @@
 
 namespace inhand {
 
+namespace {
+
+// libpng and libjpeg print their own complaints ("libpng error: Read Error") to stderr before
+// OpenCV returns an empty image: the user gets ours, naming the file, instead.
+class QuietStderr {
+ public:
+  QuietStderr() : lock_(Mutex()) {
+    std::fflush(stderr);
+    saved_ = ::dup(STDERR_FILENO);
+    const int null_fd = ::open("/dev/null", O_WRONLY);
+    if (saved_ >= 0 && null_fd >= 0) ::dup2(null_fd, STDERR_FILENO);
+    if (null_fd >= 0) ::close(null_fd);
+  }
+  ~QuietStderr() {
+    std::fflush(stderr);
+    if (saved_ >= 0) ::dup2(saved_, STDERR_FILENO), ::close(saved_);
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  static std::mutex& Mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  int saved_ = -1;
+};
+
+constexpr double kMaxPixels = 1 << 28;  // 268 megapixels
+
+}  // namespace
+
 Image8 ReadImage(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
-  const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
-  if (bgr.empty()) throw InputError(path + ": not a readable image");
+  // A PNG's header says its size: refuse an absurd one before decoding (a 60000 x 60000 header
+  // made OpenCV assert without naming the file).
+  unsigned char head[24] = {};
+  std::ifstream(path, std::ios::binary).read(reinterpret_cast<char*>(head), sizeof(head));
+  static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (std::equal(kPng, kPng + 8, head)) {
+    const auto be32 = [&](int at) { return (double(head[at]) * 256 + head[at + 1]) * 65536 + double(head[at + 2]) * 256 + head[at + 3]; };
+    const double w = be32(16), h = be32(20);
+    if (w < 1 || h < 1 || w * h > kMaxPixels)
+      throw InputError(path + ": the PNG header says " + std::to_string(static_cast<long long>(w)) + "x" +
+                       std::to_string(static_cast<long long>(h)) + " px; expected 1 to 268 million pixels");
+  }
+  cv::Mat bgr;
+  try {
+    const QuietStderr quiet;
+    bgr = cv::imread(path, cv::IMREAD_COLOR);
+  } catch (const cv::Exception& e) {
+    throw InputError(path + ": not a readable image (" + e.err + ")");
+  }
+  if (bgr.empty()) throw InputError(path + ": not a readable image (unknown format, truncated or corrupt)");
   Image8 out(bgr.cols, bgr.rows, 3);
   cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);

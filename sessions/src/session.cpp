@@ -14,6 +14,7 @@
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/output_folder.hpp"
 
 namespace fs = std::filesystem;
 
@@ -40,31 +41,36 @@ struct CsvRow {
 struct Csv {
   std::string file;
   std::vector<std::string> header;
-  std::vector<CsvRow> rows;
+  long rows = 0;
 };
 
-std::vector<std::string> SplitCsvLine(const std::string& line) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
+// Into `out`, reusing its strings (no allocation per row once they have grown).
+void SplitCsvLine(const std::string& line, std::vector<std::string>& out) {
+  std::size_t start = 0, count = 0;
   for (;;) {
     const std::size_t comma = line.find(',', start);
-    std::string field = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    while (!field.empty() && (field.back() == ' ' || field.back() == '\t')) field.pop_back();
-    std::size_t lead = 0;
-    while (lead < field.size() && (field[lead] == ' ' || field[lead] == '\t')) ++lead;
-    out.push_back(field.substr(lead));
+    std::size_t end = comma == std::string::npos ? line.size() : comma;
+    while (end > start && (line[end - 1] == ' ' || line[end - 1] == '\t')) --end;
+    std::size_t lead = start;
+    while (lead < end && (line[lead] == ' ' || line[lead] == '\t')) ++lead;
+    if (out.size() <= count) out.emplace_back();
+    out[count++].assign(line, lead, end - lead);
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
-  return out;
+  out.resize(count);
 }
 
-Csv ReadCsv(const std::string& path) {
+// Streams the rows to `on_row(const Csv&, const CsvRow&)` as they are read: a session's joints
+// are never held as text (a 10-minute recording at 500 Hz is 183 MB of it).
+template <typename OnRow>
+Csv ReadCsv(const std::string& path, OnRow&& on_row) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open (missing file?)");
   Csv csv;
   csv.file = path;
   std::string line;
+  CsvRow row;
   int number = 0;
   bool have_header = false;
   while (std::getline(in, line)) {
@@ -72,7 +78,7 @@ Csv ReadCsv(const std::string& path) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
     if (!have_header) {
-      csv.header = SplitCsvLine(line);
+      SplitCsvLine(line, csv.header);
       have_header = true;
       std::set<std::string> seen;
       for (const std::string& h : csv.header)
@@ -80,11 +86,13 @@ Csv ReadCsv(const std::string& path) {
           throw InputError(path + ":" + std::to_string(number) + ": column '" + h + "' appears twice");
       continue;
     }
-    CsvRow row{number, SplitCsvLine(line)};
+    row.line = number;
+    SplitCsvLine(line, row.fields);
     if (row.fields.size() != csv.header.size())
       throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(row.fields.size()) +
                        " columns, expected " + std::to_string(csv.header.size()) + " as in the header");
-    csv.rows.push_back(std::move(row));
+    ++csv.rows;
+    on_row(csv, row);
   }
   if (!have_header) throw InputError(path + ": empty file, expected a header line");
   return csv;
@@ -218,44 +226,53 @@ Session Session::Load(const std::string& dir) {
   }
   const jsonf::Field init = root["initial_estimate"];
   info.initial_T_PO = init["T_PO"].Pose();
-  info.sigma_position = init["sigma_position"].PositiveNumber();
-  info.sigma_orientation = init["sigma_orientation"].PositiveNumber();
-  info.sigma_joint_bias = init["sigma_joint_bias"].NonNegativeNumber();
+  // The ranges that keep the filter's arithmetic finite (StartSigmas::Validate).
+  const auto within = [](const jsonf::Field& f, double lo, double hi, const char* expected) {
+    const double v = f.Number();
+    if (!(v >= lo && v <= hi)) f.Fail(expected);
+    return v;
+  };
+  info.sigma_position = within(init["sigma_position"], 1e-6, 10.0, "a number in [1e-6, 10] m");
+  info.sigma_orientation = within(init["sigma_orientation"], 1e-6, 2 * M_PI, "a number in [1e-6, 2 pi] rad");
+  info.sigma_joint_bias = within(init["sigma_joint_bias"], 0.0, 2 * M_PI, "a number in [0, 2 pi] rad");
   if (root.Has("provenance")) info.provenance_json = root["provenance"].value.dump();
 
-  // joints.csv: t, q:<joint>..., tau:<joint>...
-  const Csv joints = ReadCsv((fs::path(dir) / "joints.csv").string());
-  if (joints.header.empty() || joints.header[0] != "t")
-    throw InputError(joints.file + ":1: first column must be 't'");
-  const std::size_t m2 = joints.header.size() - 1;
-  if (m2 == 0 || m2 % 2 != 0)
-    throw InputError(joints.file + ":1: expected t, then q:NAME for every joint, then tau:NAME for "
-                     "every joint (got " + std::to_string(m2) + " columns after t)");
-  const std::size_t m = m2 / 2;
-  for (std::size_t j = 0; j < m; ++j) {
-    const std::string& qh = joints.header[1 + j];
-    const std::string& th = joints.header[1 + m + j];
-    if (qh.rfind("q:", 0) != 0 || qh.size() < 3)
-      throw InputError(joints.file + ":1: column " + std::to_string(2 + j) + " is '" + qh + "', expected q:NAME");
-    const std::string name = qh.substr(2);
-    if (th != "tau:" + name)
-      throw InputError(joints.file + ":1: column " + std::to_string(2 + m + j) + " is '" + th +
-                       "', expected 'tau:" + name + "' (torques in the order of the positions)");
-    s.joint_names_.push_back(name);
-  }
-  if (joints.rows.empty()) throw InputError(joints.file + ": no samples");
-  const long n = static_cast<long>(joints.rows.size());
-  s.q_.resize(n, static_cast<long>(m));
-  s.tau_.resize(n, static_cast<long>(m));
+  // joints.csv: t, q:<joint>..., tau:<joint>... Parsed row by row into flat buffers.
+  std::size_t m = 0;
+  std::vector<double> q_rows, tau_rows;
   TimeColumn joint_time;
-  for (long k = 0; k < n; ++k) {
-    const CsvRow& row = joints.rows[static_cast<std::size_t>(k)];
-    s.t_.push_back(joint_time(joints, row));
-    for (std::size_t j = 0; j < m; ++j) {
-      s.q_(k, static_cast<long>(j)) = ParseNumber(joints, row, 1 + j);
-      s.tau_(k, static_cast<long>(j)) = ParseNumber(joints, row, 1 + m + j);
+  const Csv joints = ReadCsv((fs::path(dir) / "joints.csv").string(), [&](const Csv& csv, const CsvRow& row) {
+    if (m == 0) {  // the header, checked at the first row
+      if (csv.header.empty() || csv.header[0] != "t") throw InputError(csv.file + ":1: first column must be 't'");
+      const std::size_t m2 = csv.header.size() - 1;
+      if (m2 == 0 || m2 % 2 != 0)
+        throw InputError(csv.file + ":1: expected t, then q:NAME for every joint, then tau:NAME for "
+                         "every joint (got " + std::to_string(m2) + " columns after t)");
+      m = m2 / 2;
+      for (std::size_t j = 0; j < m; ++j) {
+        const std::string& qh = csv.header[1 + j];
+        const std::string& th = csv.header[1 + m + j];
+        if (qh.rfind("q:", 0) != 0 || qh.size() < 3)
+          throw InputError(csv.file + ":1: column " + std::to_string(2 + j) + " is '" + qh + "', expected q:NAME");
+        const std::string name = qh.substr(2);
+        if (th != "tau:" + name)
+          throw InputError(csv.file + ":1: column " + std::to_string(2 + m + j) + " is '" + th +
+                           "', expected 'tau:" + name + "' (torques in the order of the positions)");
+        s.joint_names_.push_back(name);
+      }
     }
-  }
+    s.t_.push_back(joint_time(csv, row));
+    for (std::size_t j = 0; j < m; ++j) q_rows.push_back(ParseNumber(csv, row, 1 + j));
+    for (std::size_t j = 0; j < m; ++j) tau_rows.push_back(ParseNumber(csv, row, 1 + m + j));
+  });
+  if (joints.rows == 0) throw InputError(joints.file + ": no samples");
+  const long n = joints.rows;
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  s.q_ = Eigen::Map<const RowMajor>(q_rows.data(), n, static_cast<long>(m));
+  std::vector<double>().swap(q_rows);
+  s.tau_ = Eigen::Map<const RowMajor>(tau_rows.data(), n, static_cast<long>(m));
+  std::vector<double>().swap(tau_rows);
+  s.t_.shrink_to_fit();
 
   // camera.csv: t, image, pose of the camera in P.
   const fs::path camera_csv = fs::path(dir) / "camera.csv";
@@ -264,10 +281,9 @@ Session Session::Load(const std::string& dir) {
   if (fs::exists(camera_csv)) {
     if (!info.camera)
       throw InputError(json_path + ": camera.csv exists but session.json has no \"camera\" intrinsics");
-    const Csv cam = ReadCsv(camera_csv.string());
-    RequireHeader(cam, WithPoseColumns({"t", "image"}));
     TimeColumn frame_time;
-    for (const CsvRow& row : cam.rows) {
+    const Csv cam_file = ReadCsv(camera_csv.string(), [&](const Csv& cam, const CsvRow& row) {
+      if (s.frames_.empty()) RequireHeader(cam, WithPoseColumns({"t", "image"}));
       CameraFrame f;
       f.t = frame_time(cam, row);
       f.image = row.fields[1];
@@ -276,20 +292,21 @@ Session Session::Load(const std::string& dir) {
                          "' not found in the session");
       f.T_PC = ParsePose(cam, row, 2);
       s.frames_.push_back(f);
-    }
+    });
+    RequireHeader(cam_file, WithPoseColumns({"t", "image"}));
   }
 
   const fs::path gt_csv = fs::path(dir) / "groundtruth.csv";
   if (fs::exists(gt_csv)) {
-    const Csv gt = ReadCsv(gt_csv.string());
-    RequireHeader(gt, WithPoseColumns({"t"}));
     TimeColumn sample_time;
-    for (const CsvRow& row : gt.rows) {
+    const Csv gt_file = ReadCsv(gt_csv.string(), [&](const Csv& gt, const CsvRow& row) {
+      if (s.groundtruth_.empty()) RequireHeader(gt, WithPoseColumns({"t"}));
       GroundTruthSample g;
       g.t = sample_time(gt, row);
       g.T_PO = ParsePose(gt, row, 1);
       s.groundtruth_.push_back(g);
-    }
+    });
+    RequireHeader(gt_file, WithPoseColumns({"t"}));
   }
   return s;
 }
@@ -360,13 +377,11 @@ SessionWriter::SessionWriter(std::string dir, SessionInfo info, std::vector<std:
                              bool overwrite)
     : dir_(std::move(dir)), info_(std::move(info)), joint_names_(std::move(joint_names)), overwrite_(overwrite) {
   if (joint_names_.empty()) throw InputError("session writer: no joints");
-  fs::path final_path = fs::absolute(dir_).lexically_normal();
-  if (final_path.filename().empty()) final_path = final_path.parent_path();
-  if (fs::exists(final_path) && !overwrite_)
+  if (fs::exists(fs::absolute(dir_)) && !overwrite_)
     throw InputError(dir_ + ": already exists (pass overwrite to replace it)");
-  tmp_ = (final_path.parent_path() / ("." + final_path.filename().string() + ".tmp-" + std::to_string(::getpid()))).string();
+  final_ = CheckOutputFolder(dir_);
+  tmp_ = PrepareStaging(final_).string();
   std::error_code ec;
-  fs::remove_all(tmp_, ec);
   fs::create_directories(fs::path(tmp_) / "images", ec);
   if (ec) throw InputError(tmp_ + ": cannot create (" + ec.message() + ")");
   joints_csv_ = "t";
@@ -447,13 +462,8 @@ void SessionWriter::Commit() {
   if (groundtruth_csv_.find('\n') + 1 < groundtruth_csv_.size())
     WriteText(fs::path(tmp_) / "groundtruth.csv", groundtruth_csv_);
   if (num_frames_ == 0) fs::remove(fs::path(tmp_) / "images");
-  fs::path final_path = fs::absolute(dir_).lexically_normal();
-  if (fs::exists(final_path)) {
-    if (!overwrite_) throw InputError(dir_ + ": appeared while writing; not replaced");
-    fs::remove_all(final_path);
-  }
-  fs::create_directories(final_path.parent_path());
-  fs::rename(tmp_, final_path);
+  if (fs::exists(final_) && !overwrite_) throw InputError(dir_ + ": appeared while writing; not replaced");
+  CommitStaging(tmp_, final_, "(session)");
   committed_ = true;
 }
 

@@ -19,6 +19,7 @@
 #include "inhand/kinematics/kinematics.hpp"
 #include "inhand/renderer/views.hpp"
 #include "inhand/sessions/session.hpp"
+#include "inhand/sessions/output_folder.hpp"
 #include "scenarios.hpp"
 #include "sim_world.hpp"
 
@@ -192,6 +193,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     throw InputError("image size must be even and at least 16x16");
   if (fs::exists(opt.out_dir) && !opt.overwrite)
     throw InputError(opt.out_dir + ": already exists (pass overwrite to replace it)");
+  CheckOutputFolder(opt.out_dir);  // before the work, not after it
   const auto wall_start = std::chrono::steady_clock::now();
   const std::string assets = AssetDir();
   const fs::path hand_dir = fs::path(assets) / "hands" / "inhand_hand";

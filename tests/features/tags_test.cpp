@@ -148,6 +148,31 @@ TEST(Tags, RegionSearchAgreesWithTheWholeFrame) {
   EXPECT_TRUE(detector.Detect(image, PixelRect{700, 10, 800, 50}).empty());
 }
 
+// libapriltag crashed (SIGSEGV) on images a few pixels high; replay reached it through a region
+// search cut by the frame's border (a 115 x 3 strip). Every tiny image, every strip and every
+// region at every border gives no tag, never a crash, at every decimation.
+TEST(Tags, TinyImagesAndRegionsAtEveryBorderNeverCrash) {
+  for (const double decimate : {1.0, 1.5, 2.0, 4.0}) {
+    TagDetectorParams p;
+    p.decimate = decimate;
+    TagDetector detector(p);
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {4, 4}, {100, 1}, {1, 100}, {115, 3}, {3, 115}, {8, 8}, {9, 20}, {640, 4}}) {
+      Image8 image(w, h, 3);
+      for (std::size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<std::uint8_t>((i * 37) & 255);
+      EXPECT_TRUE(detector.Detect(image).empty()) << w << "x" << h << " at decimate " << decimate;
+    }
+    Image8 frame(640, 480, 3);
+    for (std::size_t i = 0; i < frame.data.size(); ++i) frame.data[i] = static_cast<std::uint8_t>((i * 131) & 255);
+    for (int inside = -2; inside <= 12; ++inside) {  // regions reaching `inside` px into the frame
+      const int x = 300, y = 200;
+      for (const PixelRect& r : {PixelRect{x, -100, x + 115, inside}, PixelRect{x, 480 - inside, x + 115, 580},
+                                 PixelRect{-100, y, inside, y + 115}, PixelRect{640 - inside, y, 740, y + 115},
+                                 PixelRect{-50, -50, inside, inside}, PixelRect{640 - inside, 480 - inside, 700, 540}})
+        EXPECT_TRUE(detector.Detect(frame, r).empty()) << r.x0 << "," << r.y0 << "," << r.x1 << "," << r.y1;
+    }
+  }
+}
+
 // The object's printed tags (its appearance in the virtual image): each quad lies 0.2 mm off the
 // surface along the tag's normal, centred on the tag, and contains the tag's outer corners.
 TEST(Tags, PrintedTagMeshesSitOnTheirPlacements) {

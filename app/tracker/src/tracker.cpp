@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -100,9 +101,14 @@ struct Tracker::Impl {
     INHAND_CHECK(start_set, "Tracker::AddJointSample before Start");
     INHAND_CHECK(q.size() == hand.num_q() && tau.size() == hand.num_q(), "joint sample size does not match the hand");
     Adopt();
-    if ((started && !(t > last_t)) || (!started && !(t >= start_t - kTimeTolerance))) {
+    if (!std::isfinite(t) || (started && !(t > last_t)) || (!started && !(t >= start_t - kTimeTolerance))) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.samples_dropped;
+      return;
+    }
+    if (ScreenJointSample(hand, params, q, tau).joint >= 0) {
+      std::lock_guard<std::mutex> lock(mutex);
+      ++stats.samples_rejected;
       return;
     }
     // Images captured before this sample belong after the previous one.
@@ -141,6 +147,11 @@ struct Tracker::Impl {
     {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.images_added;
+    }
+    if (!std::isfinite(t_c) || !T_PC.matrix().allFinite() || image.empty()) {
+      std::lock_guard<std::mutex> lock(mutex);
+      ++stats.images_rejected;
+      return;
     }
     if (!started || t_c > last_t + kTimeTolerance) {
       if (t_c + kTimeTolerance < start_t) return DropLate();
@@ -376,6 +387,8 @@ Tracker::Tracker(const HandModel& hand, const ObjectModel& object, const Modalit
 Tracker::~Tracker() = default;
 
 void Tracker::Start(double t, const Transform& T_PO, const StartSigmas& sigmas) {
+  sigmas.Validate("Tracker::Start");
+  if (!std::isfinite(t) || !T_PO.matrix().allFinite()) throw InputError("Tracker::Start: the time or the pose is not finite");
   WaitForImages();
   Impl& m = *impl_;
   std::lock_guard<std::mutex> lock(m.mutex);

@@ -1,5 +1,6 @@
 #include "inhand/tracker/tracker_params.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -99,6 +100,8 @@ void Prefixed(const std::string& source, F&& validate) {
 
 void TrackerParams::Validate(const std::string& source) const {
   filter.Validate(source);
+  if (!(joint_limit_margin >= 0.0 && joint_limit_margin <= 100.0))
+    throw InputError(source + ": parameter 'joints.limit_margin' is " + std::to_string(joint_limit_margin) + ", expected in [0, 100]");
   Prefixed(source, [&] { tags.Validate(); });
   Prefixed(source, [&] { features.Validate(); });
 }
@@ -110,13 +113,17 @@ std::string TrackerParamsToJson(const TrackerParams& params) {
   tags["fine_search"] = params.tag_fine_search;
   j["tags"] = tags;
   j["features"] = Write(params.features, FeatureFields());
+  j["joints"] = {{"limit_margin", params.joint_limit_margin}};
   return j.dump(2);
 }
 
 TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::string& source) {
   Json j;
   try {
-    j = Json::parse(json_text, nullptr, true, false);
+    j = Json::parse(json_text, [&](int depth, Json::parse_event_t, Json&) {
+      if (depth > 64) throw InputError(source + ": JSON nested deeper than 64 levels");
+      return true;
+    });
   } catch (const Json::parse_error& e) {
     throw InputError(source + ": malformed JSON (" + e.what() + ")");
   }
@@ -142,9 +149,33 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
     Read(j["features"], FeatureFields(), source + " (features)", p.features);
     j.erase("features");
   }
+  if (j.contains("joints")) {
+    const Json& joints = j["joints"];
+    if (!joints.is_object()) throw InputError(source + ": 'joints' must be an object");
+    for (auto it = joints.begin(); it != joints.end(); ++it) {
+      if (it.key() != "limit_margin") throw InputError(source + " (joints): unknown parameter '" + it.key() + "'");
+      if (!it.value().is_number()) throw InputError(source + ": parameter 'joints.limit_margin' must be a number");
+      p.joint_limit_margin = it.value().get<double>();
+    }
+    j.erase("joints");
+  }
   p.filter = FilterParamsFromJson(j.dump(), source);
   p.Validate(source);
   return p;
+}
+
+RejectedJoint ScreenJointSample(const HandModel& hand, const TrackerParams& params, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                const Eigen::Ref<const Eigen::VectorXd>& tau) {
+  for (int i = 0; i < hand.num_q(); ++i) {
+    if (!std::isfinite(tau[i])) return {i, true};
+    const double v = q[i];
+    if (!std::isfinite(v)) return {i, false};
+    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    const double lo = joint.has_limits ? joint.lower - params.joint_limit_margin : -1000.0;
+    const double hi = joint.has_limits ? joint.upper + params.joint_limit_margin : 1000.0;
+    if (v < lo || v > hi) return {i, false};
+  }
+  return {};
 }
 
 TrackerParams ReadTrackerParams(const std::string& path) {

@@ -44,6 +44,8 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
   na_ = camera_state_ ? n_ + 6 : n_;
   s_.b = Eigen::VectorXd::Zero(m_);
   s_.P = Eigen::MatrixXd::Identity(na_, na_);
+  Pn_ = s_.P;
+  delta_saved_ = Eigen::VectorXd::Zero(na_);
   s_.q_prev = Eigen::VectorXd::Zero(m_);
   s_.q_eff = Eigen::VectorXd::Zero(m_);
   delta_ = Eigen::VectorXd::Zero(na_);
@@ -66,8 +68,21 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
   s_.trace.visual.reserve(512);
 }
 
+void StartSigmas::Validate(const std::string& source) const {
+  const auto check = [&](const char* name, double v, double lo, double hi, const char* expected) {
+    if (!(v >= lo && v <= hi))
+      throw InputError(source + ": '" + name + "' is " + std::to_string(v) + ", expected " + expected);
+  };
+  check("sigma_position", position, 1e-6, 10.0, "in [1e-6, 10] m");
+  check("sigma_orientation", orientation, 1e-6, 2 * M_PI, "in [1e-6, 2 pi] rad");
+  check("sigma_joint_bias", bias, 0.0, 2 * M_PI, "in [0, 2 pi] rad");
+  for (long i = 0; i < bias_per_joint.size(); ++i) check("sigma_joint_bias", bias_per_joint[i], 0.0, 2 * M_PI, "in [0, 2 pi] rad");
+}
+
 void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd>& q_meas, const StartSigmas& sigmas) {
   INHAND_CHECK(q_meas.size() == m_, "joint vector size does not match the hand");
+  sigmas.Validate("filter start");
+  if (!T_PO.matrix().allFinite() || !q_meas.allFinite()) throw InputError("filter start: the pose or the joints are not finite");
   INHAND_CHECK(sigmas.bias_per_joint.size() == 0 || sigmas.bias_per_joint.size() == m_,
                "per-joint bias sigmas do not match the hand");
   s_.p = T_PO.translation();
@@ -131,6 +146,10 @@ void Filter::RefreshKinematics() {
 void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt) {
   INHAND_CHECK(q_meas.size() == m_, "joint vector size does not match the hand");
   s_.trace.Clear();
+  if (!q_meas.allFinite() || !std::isfinite(dt)) {  // nothing non-finite enters the state
+    ++s_.trace.numeric_events;
+    return;
+  }
   if (!s_.have_prev) {
     s_.q_prev = q_meas;
     s_.have_prev = true;
@@ -144,7 +163,11 @@ void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt)
     const Vec3 finger_motion = J_ * dq_;
     twist_.Add(GraspMapBlock(c_P, s_.p), finger_motion);
   }
-  const Vec6 nu = twist_.Solve(params_.twist_damping);
+  Vec6 nu = twist_.Solve(params_.twist_damping);
+  if (!nu.allFinite()) {
+    ++s_.trace.numeric_events;
+    nu.setZero();
+  }
   s_.p += nu.head<3>();
   s_.R = ExpSO3(nu.tail<3>()) * s_.R;
   s_.trace.predicted_twist = nu;
@@ -203,14 +226,24 @@ Filter::Outcome Filter::Update(const Eigen::Matrix<double, D, 1>& r_in, const Ei
   }
   const Eigen::Matrix<double, D, D> Sinv = ldlt.solve(Eigen::Matrix<double, D, D>::Identity());
   K->noalias() = HP->transpose() * Sinv;
-  delta_.noalias() += *K * r;
-  // Joseph form, expanded: (I-KH)P(I-KH)ᵀ + KRKᵀ = P - K(HP) - (HP)ᵀKᵀ + K S Kᵀ.
-  s_.P.noalias() -= *K * *HP;
-  s_.P.noalias() -= HP->transpose() * K->transpose();
+  // Joseph form, expanded: (I-KH)P(I-KH)ᵀ + KRKᵀ = P - K(HP) - (HP)ᵀKᵀ + K S Kᵀ, into the spare
+  // buffer: the state takes it only when it is finite and its variances are not negative.
+  Pn_ = s_.P;
+  Pn_.noalias() -= *K * *HP;
+  Pn_.noalias() -= HP->transpose() * K->transpose();
   SKt->noalias() = S * K->transpose();
-  s_.P.noalias() += *K * *SKt;
+  Pn_.noalias() += *K * *SKt;
   for (int i = 0; i < na_; ++i)
-    for (int j = i + 1; j < na_; ++j) s_.P(i, j) = s_.P(j, i) = 0.5 * (s_.P(i, j) + s_.P(j, i));
+    for (int j = i + 1; j < na_; ++j) Pn_(i, j) = Pn_(j, i) = 0.5 * (Pn_(i, j) + Pn_(j, i));
+  delta_saved_ = delta_;
+  delta_.noalias() += *K * r;
+  // (A variance may be 0, a known state; below 0 beyond rounding the covariance is lost.)
+  if (!delta_.allFinite() || !Pn_.allFinite() || !(Pn_.diagonal().minCoeff() >= -1e-9 * Pn_.diagonal().maxCoeff())) {
+    delta_ = delta_saved_;
+    ++s_.trace.numeric_events;
+    return Outcome::kNumeric;
+  }
+  s_.P.swap(Pn_);
   return Outcome::kApplied;
 }
 

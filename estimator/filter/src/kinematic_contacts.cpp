@@ -56,8 +56,10 @@ void Filter::UpdateContacts(const Eigen::Ref<const Eigen::VectorXd>& tau) {
   }
   // The grip, from the torques alone (not from contacts at the estimate, which vanish when the
   // estimate drifts away and would then feed the drift).
-  s_.grip = tau.cwiseAbs().sum();
-  s_.max_grip = std::max(s_.max_grip, s_.grip);
+  if (tau.allFinite()) {
+    s_.grip = tau.cwiseAbs().sum();
+    s_.max_grip = std::max(s_.max_grip, s_.grip);
+  }
   RefreshKinematics();
 }
 

@@ -38,12 +38,21 @@ void Filter::ComputeCandidateWeights() {
 void Filter::EstimateContactForces(const Eigen::Ref<const Eigen::VectorXd>& tau) {
   torque_forces_ = options_.use_torque && !pairs_.empty();
   if (!torque_forces_) return;
+  if (!tau.allFinite()) {  // no torque contacts from torques that are not numbers
+    torque_forces_ = false;
+    ++s_.trace.numeric_events;
+    return;
+  }
   ComputeCandidateWeights();
   JtJ_.setZero();
   for (std::size_t i = 0; i < pairs_.size(); ++i) JtJ_.noalias() += inv_weight_[i] * (Jc_[i].transpose() * Jc_[i]);
   JtJ_.diagonal().array() += params_.torque_damping;
   ldlt_.compute(JtJ_);
   y_ = ldlt_.solve(tau);
+  if (!y_.allFinite()) {
+    torque_forces_ = false;
+    ++s_.trace.numeric_events;
+  }
 }
 
 ContactKind Filter::ClassifyTorqueContact(std::size_t i, FilterTrace::Contact& rec) const {

@@ -83,6 +83,11 @@ std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scal
   if (scene == nullptr || scene->mRootNode == nullptr)
     throw InputError(path + ": cannot read mesh (" + importer.GetErrorString() + ")");
 
+  // A sane limit: the YCB scans have ~16k-300k triangles; 5 million would take gigabytes.
+  std::size_t triangles = 0;
+  for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) triangles += scene->mMeshes[mi]->mNumFaces;
+  if (triangles > 5'000'000)
+    throw InputError(path + ": " + std::to_string(triangles) + " triangles, more than the 5,000,000 a model may have; simplify it");
   // One output mesh per material (merging the file's meshes that share it) or per part.
   std::map<unsigned, TriangleMesh> by_material;
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {

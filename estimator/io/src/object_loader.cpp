@@ -94,7 +94,9 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages) 
       PiecesFromMesh(meshes, method, hacd, file, obj.pieces);
       methods.push_back(method + " of " + fs::path(file).filename().string());
     } else if (c.Has("box")) {
-      obj.pieces.push_back(ConvexPiece::Box(0.5 * c["box"].Vector3(), T));
+      const Vec3 size = c["box"].Vector3();
+      if (!(size.minCoeff() > 0.0)) c["box"].Fail("three sizes > 0 [m]");
+      obj.pieces.push_back(ConvexPiece::Box(0.5 * size, T));
       methods.emplace_back("box");
     } else if (c.Has("sphere")) {
       obj.pieces.push_back(ConvexPiece::Sphere(c["sphere"].PositiveNumber(), T));
@@ -103,7 +105,7 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages) 
       const bool capsule = c.Has("capsule");
       const jsonf::Field d = c[capsule ? "capsule" : "cylinder"];
       const double radius = d["radius"].PositiveNumber();
-      const double length = d["length"].NonNegativeNumber();
+      const double length = capsule ? d["length"].NonNegativeNumber() : d["length"].PositiveNumber();
       obj.pieces.push_back(capsule ? ConvexPiece::Capsule(radius, 0.5 * length, T)
                                    : ConvexPiece::Cylinder(radius, 0.5 * length, T));
       methods.emplace_back(capsule ? "capsule" : "cylinder");
@@ -153,6 +155,9 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages) 
       const jsonf::Field t = tags.At(i);
       TagPlacement tag;
       tag.family = t.Has("family") ? t["family"].String() : "tag36h11";
+      if (tag.family != "tag36h11" && tag.family != "tag25h9" && tag.family != "tag16h5" && tag.family != "tagStandard41h12" &&
+          tag.family != "tagCircle21h7")
+        t["family"].Fail("tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
       tag.id = t["id"].Integer();
       if (tag.id < 0) t["id"].Fail("an id >= 0");
       tag.size = t["size"].PositiveNumber();

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <cmath>
 #include <functional>
 #include <mutex>
 #include <set>
@@ -30,6 +31,9 @@ void PackageMap::AddSpec(const std::string& spec) {
 }
 
 namespace {
+
+constexpr int kMaxLinks = 1000;
+
 
 std::string FindPackage(const std::string& name, const fs::path& referrer_dir,
                         const PackageMap& packages) {
@@ -113,6 +117,13 @@ XmlFacts InspectXml(const std::string& xml, const std::string& source) {
   if (robot == nullptr || std::string(robot->Value()) != "robot")
     throw InputError(source + ": not a URDF: the root element is not <robot>");
   XmlFacts facts;
+  // Sane limits: hands have tens of links; a 100,000-link chain took gigabytes and minutes.
+  int links = 0;
+  for (const TiXmlElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link"))
+    if (++links > kMaxLinks)
+      throw InputError(source + ":" + std::to_string(l->Row()) + ": more than " + std::to_string(kMaxLinks) +
+                       " links; a hand has far fewer");
+  std::map<std::string, int> parent_of;  // child link → line of the joint that moves it
   for (const TiXmlElement* j = robot->FirstChildElement("joint"); j;
        j = j->NextSiblingElement("joint")) {
     const char* name = j->Attribute("name");
@@ -127,6 +138,14 @@ XmlFacts InspectXml(const std::string& xml, const std::string& source) {
     if ((t == "revolute" || t == "prismatic") && j->FirstChildElement("limit") == nullptr)
       throw InputError(where + ": " + t + " joint '" + std::string(name) +
                        "' has no <limit> (lower/upper/effort/velocity are required)");
+    if (const TiXmlElement* child = j->FirstChildElement("child"); child && child->Attribute("link")) {
+      const std::string link = child->Attribute("link");
+      if (parent_of.count(link))
+        throw InputError(where + ": joint '" + std::string(name) + "' makes link '" + link +
+                         "' the child of a second joint (the first at line " + std::to_string(parent_of[link]) +
+                         "); a link has one parent joint");
+      parent_of[link] = j->Row();
+    }
     facts.joint_line[name] = j->Row();
     facts.joint_order.emplace_back(name);
   }
@@ -147,22 +166,31 @@ Material UrdfMaterial(const urdf::Visual& v) {
 void AddCollisionGeometry(const urdf::Geometry& g, const Transform& T_LG, const std::string& where,
                           const std::string& urdf_path, const HandLoadOptions& options,
                           MeshCache& cache, std::vector<ConvexPiece>& out) {
+  const auto positive = [&](const char* what, double v) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw InputError(where + ": " + what + " is " + std::to_string(v) + ", expected a finite number > 0");
+  };
   switch (g.type) {
     case urdf::Geometry::BOX: {
       const auto& b = static_cast<const urdf::Box&>(g);
+      positive("box size x", b.dim.x), positive("box size y", b.dim.y), positive("box size z", b.dim.z);
       out.push_back(ConvexPiece::Box(0.5 * Vec3(b.dim.x, b.dim.y, b.dim.z), T_LG));
       break;
     }
     case urdf::Geometry::SPHERE:
+      positive("sphere radius", static_cast<const urdf::Sphere&>(g).radius);
       out.push_back(ConvexPiece::Sphere(static_cast<const urdf::Sphere&>(g).radius, T_LG));
       break;
     case urdf::Geometry::CYLINDER: {
       const auto& c = static_cast<const urdf::Cylinder&>(g);
+      positive("cylinder radius", c.radius), positive("cylinder length", c.length);
       out.push_back(ConvexPiece::Cylinder(c.radius, 0.5 * c.length, T_LG));
       break;
     }
     case urdf::Geometry::MESH: {
       const auto& m = static_cast<const urdf::Mesh&>(g);
+      positive("mesh scale x", std::abs(m.scale.x)), positive("mesh scale y", std::abs(m.scale.y)),
+          positive("mesh scale z", std::abs(m.scale.z));
       const std::string file = ResolveResource(m.filename, urdf_path, options.packages);
       const auto& meshes = cache.Get(file, Vec3(m.scale.x, m.scale.y, m.scale.z),
                                      options.collision_mesh_components ? MeshGrouping::kByPart
@@ -246,18 +274,24 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
   std::map<std::string, int> link_index;
   std::vector<urdf::LinkConstSharedPtr> link_order;
   std::vector<urdf::JointConstSharedPtr> joint_order;  // topological
-  std::function<void(const urdf::LinkConstSharedPtr&)> visit = [&](const urdf::LinkConstSharedPtr& l) {
+  // Iterative (a long chain must not exhaust the stack): each stack entry is a joint whose child
+  // link comes next, pushed in reverse document order so that they pop in document order.
+  const auto visit = [&](const urdf::LinkConstSharedPtr& l, std::vector<urdf::JointConstSharedPtr>& stack) {
     link_index[l->name] = static_cast<int>(link_order.size());
     link_order.push_back(l);
     std::vector<urdf::JointConstSharedPtr> children(l->child_joints.begin(), l->child_joints.end());
     std::sort(children.begin(), children.end(),
-              [&](const auto& a, const auto& b) { return doc_index[a->name] < doc_index[b->name]; });
-    for (const auto& j : children) {
-      joint_order.push_back(j);
-      visit(urdf->getLink(j->child_link_name));
-    }
+              [&](const auto& a, const auto& b) { return doc_index[a->name] > doc_index[b->name]; });
+    stack.insert(stack.end(), children.begin(), children.end());
   };
-  visit(root);
+  std::vector<urdf::JointConstSharedPtr> stack;
+  visit(root, stack);
+  while (!stack.empty()) {
+    const urdf::JointConstSharedPtr j = stack.back();
+    stack.pop_back();
+    joint_order.push_back(j);
+    visit(urdf->getLink(j->child_link_name), stack);
+  }
   model.root_link = 0;
 
   MeshCache cache;

@@ -32,5 +32,7 @@ struct EstimateRecord {
 // Fills the errors against the true pose and the NEES of the pose against its covariance P
 // (6×6, the filter's error convention p = p̂ + δp, R = Exp(δθ) R̂).
 void CompareWithTruth(const Transform& truth, const Mat6& P, EstimateRecord& r);
+// The record with its comparison fields reset (no truth at its time).
+EstimateRecord WithoutTruth(EstimateRecord r);
 
 }  // namespace inhand::app

@@ -51,6 +51,25 @@ class SessionPlayer {
   const SessionModels& models() const { return models_; }
   const TrackerParams& params() const { return params_; }
 
+  // What the session holds that the trackers will not use, found when the player is made: joint
+  // samples no hand can produce (dropped), frames captured before the first joint sample
+  // (dropped), ground truth that does not cover every joint sample (no errors there).
+  struct InputReport {
+    struct Rejected {
+      int sample = -1;
+      int joint = -1;     // configuration index
+      bool torque = false;
+      double value = 0.0;
+    };
+    std::vector<Rejected> rejected_samples;
+    int frames_before_first_sample = 0;
+    double truth_from = 0.0, truth_to = 0.0;  // [s] ground truth's span (when there is truth)
+    int samples_without_truth = 0;
+    // One warning line each ("FILE:LINE: ..."), for stderr.
+    std::vector<std::string> Warnings(const Session& session, const SessionModels& models, const TrackerParams& params) const;
+  };
+  const InputReport& input_report() const { return report_; }
+
  private:
   const Session& session_;
   SessionModels models_;
@@ -59,7 +78,10 @@ class SessionPlayer {
   std::vector<std::unique_ptr<Tracker>> trackers_;
   StepState state_;
   Eigen::VectorXd q_, tau_;  // joint sample k in the hand's order
+  void Gather(int k);        // into q_, tau_
+  bool TruthCovers(double t) const;
   VisualStep no_features_;
+  InputReport report_;
 };
 
 }  // namespace inhand::app

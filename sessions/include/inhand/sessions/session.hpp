@@ -2,6 +2,7 @@
 // Session format v1 (sessions/FORMAT.md is the normative text): a directory with session.json,
 // joints.csv, camera.csv + images/, and optionally groundtruth.csv. Reading validates
 // everything up front and throws InputError naming the file, line and column at fault.
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -115,6 +116,7 @@ class SessionWriter {
 
  private:
   std::string dir_, tmp_;
+  std::filesystem::path final_;
   SessionInfo info_;
   std::vector<std::string> joint_names_;
   bool overwrite_;

@@ -56,10 +56,12 @@ struct TrackerOptions {
 struct TrackerStats {
   long samples = 0;                // joint samples fused
   long samples_dropped = 0;        // not later than the previous one, or before the start
+  long samples_rejected = 0;       // no hand can produce them (ScreenJointSample)
   long images_added = 0;
   long images_fused = 0;
   long images_dropped_late = 0;    // captured beyond the horizon or before the first sample
   long images_dropped_busy = 0;    // threaded: the worker was behind
+  long images_rejected = 0;        // empty, or with a time or camera pose that is not finite
   long rewinds = 0;                // images fused before joint samples already fused
   long samples_replayed = 0;       // joint samples re-applied after them
 };

@@ -5,6 +5,7 @@
 // errors that name the file and the field; every value is validated.
 #include <string>
 
+#include "inhand/core/hand_model.hpp"
 #include "inhand/features/extracted.hpp"
 #include "inhand/features/tags.hpp"
 #include "inhand/filter/params.hpp"
@@ -18,6 +19,11 @@ struct TrackerParams {
   bool tag_fine_search = true;     // search tags the decimated detection missed at full
                                    // resolution where the estimate expects them
   FeatureParams features;
+  // Joint samples that no hand can produce are dropped (counted), never fused: a value that is
+  // not a number, or beyond its URDF limits by more than this (rad or m; joints without limits:
+  // beyond ±1000). A real hand's encoders overshoot their URDF limits a little (the Allegro's
+  // thumb by ~0.1 rad); a corrupt sample is off by far more. JSON: "joints": {"limit_margin"}.
+  double joint_limit_margin = 0.5;
 
   // Throws InputError("SOURCE: parameter '...' is ..., expected ...").
   void Validate(const std::string& source = "tracker parameters") const;
@@ -27,5 +33,14 @@ std::string TrackerParamsToJson(const TrackerParams& params);
 TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::string& source);
 // Reads a parameter file; InputError naming the file when it cannot be read or a field is wrong.
 TrackerParams ReadTrackerParams(const std::string& path);
+
+// The first joint (configuration index) whose sample must not be fused under `params`, or -1.
+// `torque` tells whether it is the torque (not a number) rather than the position.
+struct RejectedJoint {
+  int joint = -1;
+  bool torque = false;
+};
+RejectedJoint ScreenJointSample(const HandModel& hand, const TrackerParams& params, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                const Eigen::Ref<const Eigen::VectorXd>& tau);
 
 }  // namespace inhand

@@ -7,6 +7,7 @@
 // Joseph-form block update with one retraction per step. Sized once from the model: a step
 // allocates nothing after warm-up.
 #include <Eigen/Cholesky>
+#include <string>
 #include <vector>
 
 #include "inhand/core/contact.hpp"
@@ -56,7 +57,8 @@ struct FilterTrace {
   Vec6 predicted_twist = Vec6::Zero();  // (Δp, Δθ) of the last Predict
   int num_constraints = 0;          // contact blocks applied
   int num_gated = 0;                // blocks rejected by a gate
-  int numeric_events = 0;           // ill-conditioned S, non-finite residuals (skipped)
+  int numeric_events = 0;           // ill-conditioned S, non-finite inputs or results (skipped:
+                                    // nothing non-finite enters the state)
   bool slipping = false;            // Predict grew the random walk: the grip was too weak
   void Clear();
 };
@@ -73,6 +75,10 @@ struct StartSigmas {
   double orientation = 5.0 * M_PI / 180;   // [rad] per axis
   double bias = 5.0 * M_PI / 180;          // [rad] every joint bias, unless bias_per_joint is set
   Eigen::VectorXd bias_per_joint;          // [rad] one per joint (empty: `bias` for every joint)
+  // Throws InputError("SOURCE: 'sigma_position' is V, expected ...") outside the ranges that
+  // keep the filter's arithmetic finite: position [1e-6, 10] m, orientation [1e-6, 2π] rad,
+  // biases [0, 2π] rad.
+  void Validate(const std::string& source = "start sigmas") const;
 };
 
 struct FilterOptions {
@@ -175,6 +181,8 @@ class Filter {
 
   FilterState s_;
   Eigen::VectorXd delta_;  // accumulated, not yet applied correction (na_)
+  Eigen::VectorXd delta_saved_;  // delta_ before the block being applied
+  Eigen::MatrixXd Pn_;           // the covariance after the block being applied
   KinematicsData kin_;
   std::vector<ContactPair> pairs_;
 

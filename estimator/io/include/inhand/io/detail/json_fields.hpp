@@ -37,6 +37,9 @@ struct Field {
   Transform Pose() const;
 };
 
+// Deeper nesting is an error (no inhand file needs more than a few levels).
+constexpr int kMaxJsonDepth = 64;
+
 // Reads and parses a JSON file; errors name the file and the line.
 Json ReadFile(const std::string& path);
 Json ParseText(const std::string& text, const std::string& file);
