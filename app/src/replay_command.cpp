@@ -156,6 +156,10 @@ int RunReplay(const ReplayCommand& cmd) {
               {"visual_updates", st.visual_ms.size()},
               {"features_used", st.features_used},
               {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
+    const TrackerStats ts = pipeline.tracker(i).stats();
+    s["images_fused"] = ts.images_fused;
+    s["images_dropped"] = ts.images_dropped_late + ts.images_dropped_busy + ts.images_rejected;
+    s["joint_samples_dropped"] = ts.samples_dropped + ts.samples_rejected;
     if (st.with_truth > 0) {
       // At the last sample the ground truth covers.
       s["terminal_position_error_mm"] = st.last_with_truth.position_error * 1000;

@@ -136,6 +136,7 @@ TEST(Robustness, AnAbsurdJointSampleIsDroppedAndReported) {
     for (const char* set : {"j", "jt"}) {
       const double e = s.at("modalities").at(set).at("terminal_position_error_mm").get<double>();
       EXPECT_TRUE(std::isfinite(e));
+      EXPECT_EQ(s.at("modalities").at(set).at("joint_samples_dropped"), 1) << set;
       EXPECT_NEAR(e, clean.at("modalities").at(set).at("terminal_position_error_mm").get<double>(), 1.0) << set << " " << value;
     }
     EXPECT_EQ(Read(dir / ("r" + value) + "/estimates.csv").find("nan"), std::string::npos);
@@ -163,7 +164,8 @@ TEST(Robustness, ParametersThatBreakTheArithmeticAreRefused) {
   const test::CommandResult r =
       test::RunInhand("replay " + Session() + " --no-video --modalities j,jt,jta --params " + (dir / "edge.json") + " --out " + (dir / "edge"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const auto& [set, m] : Summary(dir / "edge").at("modalities").items()) {
+  const Json edge = Summary(dir / "edge");
+  for (const auto& [set, m] : edge.at("modalities").items()) {
     EXPECT_TRUE(std::isfinite(m.at("terminal_position_error_mm").get<double>())) << set;
     EXPECT_TRUE(std::isfinite(m.at("nees_mean").get<double>())) << set;
     EXPECT_GE(m.at("nees_mean").get<double>(), 0.0) << set;
@@ -188,6 +190,11 @@ TEST(Robustness, DeepJsonAndLongUrdfChainsAreErrorsNotCrashes) {
   text.replace(at, 1, std::string(100000, '[') + "1" + std::string(100000, ']'));
   std::ofstream(dir / "deep/session.json") << text;
   test::CommandResult r = test::RunInhand("replay " + (dir / "deep") + " --no-video --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2) << r.output.substr(0, 300);
+  EXPECT_NE(r.output.find("nested deeper than 64"), std::string::npos) << r.output.substr(0, 300);
+  dir.Write("o/object.json", R"({"format": "inhand-object", "version": 1, "name": "b", "visual": [], "collision": [{"box": [0.05, 0.02, 0.1]}], "mass": )" +
+                                std::string(100000, '[') + "0.1" + std::string(100000, ']') + "}");
+  r = test::RunInhand("model " + (dir / "o/object.json"));
   EXPECT_EQ(r.exit_code, 2) << r.output.substr(0, 300);
   EXPECT_NE(r.output.find("nested deeper than 64"), std::string::npos) << r.output.substr(0, 300);
   dir.Write("deep.json", std::string(70000, '[') + std::string(70000, ']'));
@@ -264,6 +271,16 @@ TEST(Robustness, BadGeometryAndDuplicatesAreRefusedByName) {
   r = test::RunInhand("replay " + (dir / "v") + " --no-video --out " + (dir / "out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("version"), std::string::npos) << r.output;
+  // A camera width of 4294967936 does not read as 640.
+  fs::copy(Session(), dir / "w", fs::copy_options::recursive);
+  text = Read(dir / "w/session.json");
+  const std::size_t width = text.find("\"width\": 640");
+  ASSERT_NE(width, std::string::npos);
+  text.replace(width, 13, "\"width\": 4294967936");
+  std::ofstream(dir / "w/session.json") << text;
+  r = test::RunInhand("replay " + (dir / "w") + " --no-video --out " + (dir / "out"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("width"), std::string::npos) << r.output;
 }
 
 // Frames stamped before the first joint sample are not fused at it; ground truth that does not

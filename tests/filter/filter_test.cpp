@@ -338,6 +338,35 @@ TEST(Filter, StepAllocatesNothingAfterWarmUp) {
   }
 }
 
+// Nothing non-finite enters the state: a joint sample of 1e300 rad or NaN, torques that are not
+// numbers, a NaN pixel are skipped and counted; the estimate stays where it was and finite.
+TEST(Filter, NonFiniteInputsAreSkippedAndCounted) {
+  GraspScene s;
+  Filter filter(s.hand, s.query, FilterParams(), FilterOptions{true});
+  filter.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
+  const Eigen::VectorXd tau = Eigen::VectorXd::Constant(16, 0.5);
+  for (int k = 0; k < 10; ++k) filter.Predict(s.q, 0.002), filter.UpdateContacts(tau);
+  for (const double bad : {1e300, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    Eigen::VectorXd q = s.q;
+    q[5] = bad;
+    filter.Predict(q, 0.002);
+    EXPECT_GE(filter.trace().numeric_events, bad == 1e300 ? 0 : 1);
+    filter.UpdateContacts(tau);
+    Eigen::VectorXd nan_tau = tau;
+    nan_tau[3] = std::numeric_limits<double>::quiet_NaN();
+    filter.Predict(s.q, 0.002);
+    filter.UpdateContacts(nan_tau);
+    EXPECT_GE(filter.trace().numeric_events, 1);
+    std::vector<VisualFeature> f{{0, Vec3::Zero(), Vec2(std::numeric_limits<double>::quiet_NaN(), 1.0)}};
+    EXPECT_EQ(filter.UpdateVisual(f, CameraLookingAt(s.T_PO.translation()), TestIntrinsics()), 0);
+    EXPECT_TRUE(filter.T_PO().matrix().allFinite());
+    EXPECT_TRUE(filter.state().P.allFinite());
+    EXPECT_TRUE(filter.biases().allFinite());
+  }
+  // (1e300 rad is a number: the filter takes it, its state stays finite; the tracker screens
+  // such samples out before they reach the filter.)
+}
+
 // A saved state restored into another filter of the same hand continues bit-identically.
 TEST(Filter, RestoredStateContinuesBitIdentically) {
   GraspScene s;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "inhand/core/error.hpp"
+#include "inhand/io/detail/json_fields.hpp"
 
 namespace inhand {
 
@@ -118,15 +119,7 @@ std::string TrackerParamsToJson(const TrackerParams& params) {
 }
 
 TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::string& source) {
-  Json j;
-  try {
-    j = Json::parse(json_text, [&](int depth, Json::parse_event_t, Json&) {
-      if (depth > 64) throw InputError(source + ": JSON nested deeper than 64 levels");
-      return true;
-    });
-  } catch (const Json::parse_error& e) {
-    throw InputError(source + ": malformed JSON (" + e.what() + ")");
-  }
+  Json j = jsonf::ParseText(json_text, source);  // bounded depth, errors with the line
   if (!j.is_object()) throw InputError(source + ": expected a JSON object of parameters");
   TrackerParams p;
   if (j.contains("tags")) {
