@@ -45,5 +45,28 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
   EXPECT_GE(frames, 8);
 }
 
+// At a camera frame the tag set reports its innovation (it was never set for jta), and a
+// sample's gated count is its contacts' and features' once (the visual gates were added twice).
+TEST(SessionPlayer, VisualRecordsOfTagsAndFeatures) {
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 5 --out " + (dir / "session")).exit_code, 0);
+  Session session = Session::Load(dir / "session");
+  SessionPlayer player(session, TrackerParams(), app::ParseModalities("jta,jtf"));
+  int frames = 0;
+  for (int k = 0; k < 1200; ++k) {
+    player.Step(k);
+    for (std::size_t i = 0; i < 2; ++i) {
+      const app::EstimateRecord& r = player.last(i);
+      EXPECT_EQ(r.gated, player.tracker(i).trace().num_gated);
+      if (player.last_frame() < 0) continue;
+      EXPECT_GE(r.visual_ms, 0.0) << player.sets()[i].name;
+      if (r.visual_used == 0) continue;
+      EXPECT_GT(r.visual_mahalanobis, 0.0) << player.sets()[i].name << " at sample " << k;
+      frames += i == 0;
+    }
+  }
+  EXPECT_GE(frames, 5);  // frames where jta fused tag corners
+}
+
 }  // namespace
 }  // namespace inhand
