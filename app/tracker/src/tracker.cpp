@@ -34,12 +34,7 @@ namespace {
 
 constexpr double kTimeTolerance = 1e-9;  // [s] an image at t_c goes after samples with t <= t_c + this
 
-struct Slot {
-  double t = 0.0, dt = 0.0;
-  Eigen::VectorXd q, tau;
-  FilterState after_sample;
-  std::vector<VisualUpdate> fused;
-};
+using Slot = TrackedSample;
 
 struct Job {
   double t_capture = 0.0;
@@ -439,14 +434,7 @@ TrackerSnapshot Tracker::Save() const {
   s.filter = m.filter.state();
   s.visual = m.last_visual;
   s.stats = m.stats;
-  if (m.last >= m.first) {
-    const Slot& slot = m.At(m.last);
-    s.dt = slot.dt;
-    s.q = slot.q;
-    s.tau = slot.tau;
-    s.checkpoint = slot.after_sample;
-    s.fused = slot.fused;
-  }
+  if (m.last >= m.first) s.last = m.At(m.last);
   return s;
 }
 
@@ -467,13 +455,7 @@ void Tracker::Restore(const TrackerSnapshot& s) {
   if (!s.started) return;
   m.filter.Restore(s.filter);
   m.last = 0;
-  Slot& slot = m.At(0);
-  slot.t = s.t;
-  slot.dt = s.dt;
-  slot.q = s.q;
-  slot.tau = s.tau;
-  slot.after_sample = s.checkpoint;
-  slot.fused = s.fused;
+  m.At(0) = s.last;
 }
 
 }  // namespace inhand

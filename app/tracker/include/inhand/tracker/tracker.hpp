@@ -93,14 +93,21 @@ struct VisualUpdate {
   Intrinsics K;
 };
 
+// One joint sample as the tracker keeps it: the sample, the filter's checkpoint after its
+// contacts, and the visual updates fused after it.
+struct TrackedSample {
+  double t = 0.0, dt = 0.0;
+  Eigen::VectorXd q, tau;
+  FilterState after_sample;
+  std::vector<VisualUpdate> fused;
+};
+
 // A tracker's state at one joint sample, to continue from later (the GUI seeks with these).
 struct TrackerSnapshot {
   bool started = false;
-  double t = 0.0, dt = 0.0;
-  Eigen::VectorXd q, tau;
-  FilterState checkpoint;              // after the sample's contacts
-  std::vector<VisualUpdate> fused;     // the visual updates after it
-  FilterState filter;                  // after those
+  double t = 0.0;
+  TrackedSample last;      // the newest sample
+  FilterState filter;      // after it and its visual updates
   VisualStep visual;
   TrackerStats stats;
 };
