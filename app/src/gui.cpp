@@ -91,7 +91,7 @@ struct Texture {
   }
 };
 
-// Runs tasks on one thread of its own, waiting for each. The pipeline's OSMesa renderers live
+// Runs tasks on one thread of its own, waiting for each. The player's OSMesa renderers live
 // there: Mesa's dispatch is per thread, so they never disturb the window's GLX context.
 class RenderThread {
  public:
@@ -171,12 +171,12 @@ class Runner {
  public:
   Runner(Session& session, GuiState& state) : session_(session), state_(state) { Restart(); }
   void Restart() {
-    pipeline_ = std::make_unique<SessionPlayer>(session_, state_.params);
-    composer_ = std::make_unique<FrameComposer>(*pipeline_);
+    player_ = std::make_unique<SessionPlayer>(session_, state_.params);
+    composer_ = std::make_unique<FrameComposer>(*player_);
     next_ = 0;
     last_frame_ = -1;
     checkpoints_.clear();
-    const std::size_t sets = pipeline_->sets().size();
+    const std::size_t sets = player_->sets().size();
     for (auto* h : Histories())
       h->assign(sets, {});
     StepTo(0);
@@ -192,7 +192,7 @@ class Runner {
         Restart();
       } else {
         --it;
-        pipeline_->Restore(it->second.pipeline);
+        player_->Restore(it->second.player);
         next_ = it->first;
         last_frame_ = it->second.last_frame;
         for (auto* h : Histories())
@@ -201,9 +201,9 @@ class Runner {
       }
     }
     while (next_ <= k) {
-      pipeline_->Step(next_);
-      for (std::size_t i = 0; i < pipeline_->sets().size(); ++i) {
-        const EstimateRecord& r = pipeline_->last(i);
+      player_->Step(next_);
+      for (std::size_t i = 0; i < player_->sets().size(); ++i) {
+        const EstimateRecord& r = player_->last(i);
         state_.position_error[i].push_back(static_cast<float>(r.position_error * 1000));
         state_.orientation_error[i].push_back(static_cast<float>(r.orientation_error * 180 / M_PI));
         state_.sigma_position[i].push_back(static_cast<float>(r.sigma_position.norm() * 1000));
@@ -212,10 +212,10 @@ class Runner {
         state_.gated[i].push_back(static_cast<float>(r.gated));
         state_.innovation[i].push_back(static_cast<float>(r.visual_mahalanobis));
       }
-      if (pipeline_->last_frame() >= 0) last_frame_ = pipeline_->last_frame(), state_.pictures_dirty = true;
+      if (player_->last_frame() >= 0) last_frame_ = player_->last_frame(), state_.pictures_dirty = true;
       ++next_;
       if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_))
-        checkpoints_.emplace(next_, RunnerCheckpoint{pipeline_->Save(), last_frame_});
+        checkpoints_.emplace(next_, RunnerCheckpoint{player_->Save(), last_frame_});
     }
   }
   void StepFrame() {
@@ -234,13 +234,13 @@ class Runner {
   }
   int sample() const { return next_ - 1; }
   int frame() const { return last_frame_; }
-  const SessionPlayer& pipeline() const { return *pipeline_; }
+  const SessionPlayer& player() const { return *player_; }
   Session& session() { return session_; }
 
  private:
   Session& session_;
   GuiState& state_;
-  std::unique_ptr<SessionPlayer> pipeline_;
+  std::unique_ptr<SessionPlayer> player_;
   std::unique_ptr<FrameComposer> composer_;
   int next_ = 0;
   int last_frame_ = -1;
@@ -248,7 +248,7 @@ class Runner {
   // images (a few MB): every 250 samples (0.5 s at 500 Hz), at most ~50 per session.
   int CheckpointEvery() const { return std::max(250, session_.num_samples() / 50); }
   struct RunnerCheckpoint {
-    SessionPlayer::Checkpoint pipeline;
+    SessionPlayer::Checkpoint player;
     int last_frame;
   };
   std::map<int, RunnerCheckpoint> checkpoints_;
@@ -269,7 +269,7 @@ void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiSt
   Image8 picture;
   render.Run([&] { picture = runner.Picture(); });
   tex.picture.Upload(gl, picture);
-  const MatchPictures m = DrawMatchPictures(runner.pipeline().last_image(), runner.pipeline().last_feature_step());
+  const MatchPictures m = DrawMatchPictures(runner.player().last_image(), runner.player().last_feature_step());
   tex.camera_edges.Upload(gl, m.edges_camera);
   tex.virtual_edges.Upload(gl, m.edges_virtual);
   tex.difference.Upload(gl, m.difference);
@@ -323,7 +323,7 @@ constexpr float kPanelWidth = 330.0f;
 
 void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
   const Session& s = runner.session();
-  const SessionPlayer& p = runner.pipeline();
+  const SessionPlayer& p = runner.player();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(height)));
   ImGui::Begin("inhand", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse);

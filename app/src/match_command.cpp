@@ -24,23 +24,23 @@ int RunMatch(const MatchCommand& cmd) {
   const int frames = static_cast<int>(session.camera_frames().size());
   if (cmd.frame < 0 || cmd.frame >= frames)
     throw InputError("--frame " + std::to_string(cmd.frame) + " is out of range, the session has frames 0.." + std::to_string(frames - 1));
-  SessionPlayer pipeline(session, TrackerParams(), ParseModalities("jtf"));
+  SessionPlayer player(session, TrackerParams(), ParseModalities("jtf"));
   int k = 0;
   for (; k < session.num_samples(); ++k) {
-    pipeline.Step(k);
-    if (pipeline.last_frame() == cmd.frame) break;
+    player.Step(k);
+    if (player.last_frame() == cmd.frame) break;
   }
-  const VisualStep& fs = pipeline.last_feature_step();
-  if (pipeline.last_frame() != cmd.frame || fs.sequence == 0) throw InputError(cmd.session + ": frame " + std::to_string(cmd.frame) + " comes after the last joint sample");
+  const VisualStep& fs = player.last_feature_step();
+  if (player.last_frame() != cmd.frame || fs.sequence == 0) throw InputError(cmd.session + ": frame " + std::to_string(cmd.frame) + " comes after the last joint sample");
   const MatchResult& r = fs.match;
   const MatchDebug& d = r.debug;
 
-  const MatchPictures pictures = DrawMatchPictures(pipeline.last_image(), fs);
+  const MatchPictures pictures = DrawMatchPictures(player.last_image(), fs);
 
   StagedOutput out(cmd.out, {cmd.session}, "match");
   {
     const std::vector<std::pair<std::string, const Image8*>> images = {
-        {"camera.png", &pipeline.last_image()}, {"virtual.png", &fs.virtual_view.colour},
+        {"camera.png", &player.last_image()}, {"virtual.png", &fs.virtual_view.colour},
         {"edges_camera.png", &pictures.edges_camera}, {"edges_virtual.png", &pictures.edges_virtual},
         {"corners_camera.png", &pictures.corners_camera}, {"corners_virtual.png", &pictures.corners_virtual},
         {"pieces.png", &pictures.pieces}, {"hough_votes.png", &pictures.votes}, {"matches.png", &pictures.matches},

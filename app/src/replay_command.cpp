@@ -56,12 +56,12 @@ int RunReplay(const ReplayCommand& cmd) {
   Session session = Session::Load(cmd.session);
   TrackerParams params;
   if (!cmd.params.empty()) params = ReadTrackerParams(cmd.params);
-  SessionPlayer pipeline(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
-  const std::vector<ModalitySet>& sets = pipeline.sets();
+  SessionPlayer player(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
+  const std::vector<ModalitySet>& sets = player.sets();
   const bool want_pictures = (!cmd.no_video || cmd.frames) && session.info().camera.has_value();
   std::unique_ptr<FrameComposer> composer;
-  if (want_pictures) composer = std::make_unique<FrameComposer>(pipeline);
-  for (const std::string& w : pipeline.input_report().Warnings(session, pipeline.models(), pipeline.params()))
+  if (want_pictures) composer = std::make_unique<FrameComposer>(player);
+  for (const std::string& w : player.input_report().Warnings(session, player.models(), player.params()))
     std::cerr << "inhand: warning: " << w << "\n";
 
   StagedOutput out(cmd.out, {cmd.session, cmd.params}, "replay");
@@ -79,9 +79,9 @@ int RunReplay(const ReplayCommand& cmd) {
   const auto wall_start = std::chrono::steady_clock::now();
   const int n = session.num_samples();
   for (int k = 0; k < n; ++k) {
-    pipeline.Step(k);
+    player.Step(k);
     for (std::size_t i = 0; i < sets.size(); ++i) {
-      const EstimateRecord& r = pipeline.last(i);
+      const EstimateRecord& r = player.last(i);
       // The filter lets nothing non-finite into its state; should it ever, no output pretends
       // otherwise.
       if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() || !r.sigma_orientation.allFinite())
@@ -110,7 +110,7 @@ int RunReplay(const ReplayCommand& cmd) {
       }
     }
     // The camera frame this sample processed, if any.
-    if (const int frame = pipeline.last_frame(); frame >= 0) {
+    if (const int frame = player.last_frame(); frame >= 0) {
       if (composer) {
         const Image8 picture = composer->Compose(frame, session.t(k));
         if (!cmd.no_video) {
@@ -140,10 +140,10 @@ int RunReplay(const ReplayCommand& cmd) {
                   {"camera_frames", frames.size()},
                   {"video", video ? "replay.mp4" : Json(nullptr)},
                   {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
-                  {"parameters", Json::parse(TrackerParamsToJson(pipeline.params()))},
-                  {"joint_samples_rejected", pipeline.input_report().rejected_samples.size()},
-                  {"frames_before_first_sample", pipeline.input_report().frames_before_first_sample},
-                  {"samples_without_truth", pipeline.input_report().samples_without_truth}};
+                  {"parameters", Json::parse(TrackerParamsToJson(player.params()))},
+                  {"joint_samples_rejected", player.input_report().rejected_samples.size()},
+                  {"frames_before_first_sample", player.input_report().frames_before_first_sample},
+                  {"samples_without_truth", player.input_report().samples_without_truth}};
   Json per_set = Json::object();
   for (std::size_t i = 0; i < sets.size(); ++i) {
     const SetStats& st = stats[i];
@@ -156,7 +156,7 @@ int RunReplay(const ReplayCommand& cmd) {
               {"visual_updates", st.visual_ms.size()},
               {"features_used", st.features_used},
               {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
-    const TrackerStats ts = pipeline.tracker(i).stats();
+    const TrackerStats ts = player.tracker(i).stats();
     s["images_fused"] = ts.images_fused;
     s["images_dropped"] = ts.images_dropped_late + ts.images_dropped_busy + ts.images_rejected;
     s["joint_samples_dropped"] = ts.samples_dropped + ts.samples_rejected;
@@ -180,7 +180,7 @@ int RunReplay(const ReplayCommand& cmd) {
   }
   summary["modalities"] = per_set;
   std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
-  std::ofstream(out / "params.json") << TrackerParamsToJson(pipeline.params()) << "\n";
+  std::ofstream(out / "params.json") << TrackerParamsToJson(player.params()) << "\n";
   out.Commit();
 
   std::cout << "replay of " << session.info().name << " (" << n << " samples, " << frames.size() << " frames) written to " << cmd.out << "\n";

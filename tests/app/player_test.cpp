@@ -16,31 +16,31 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
   test::TempDir dir;
   ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " + (dir / "session")).exit_code, 0);
   Session session = Session::Load(dir / "session");
-  SessionPlayer pipeline(session, TrackerParams());
-  ASSERT_EQ(pipeline.sets().size(), 4u);
+  SessionPlayer player(session, TrackerParams());
+  ASSERT_EQ(player.sets().size(), 4u);
   const int mid = 400, end = 900;  // 500 Hz joints, 10 Hz camera: ten frames in between
-  for (int k = 0; k < mid; ++k) pipeline.Step(k);
-  const SessionPlayer::Checkpoint checkpoint = pipeline.Save();
-  std::vector<std::vector<Transform>> first(pipeline.sets().size());
+  for (int k = 0; k < mid; ++k) player.Step(k);
+  const SessionPlayer::Checkpoint checkpoint = player.Save();
+  std::vector<std::vector<Transform>> first(player.sets().size());
   std::vector<Eigen::MatrixXd> first_P;
   for (int k = mid; k < end; ++k) {
-    pipeline.Step(k);
-    for (std::size_t i = 0; i < pipeline.sets().size(); ++i) first[i].push_back(pipeline.last(i).T_PO);
+    player.Step(k);
+    for (std::size_t i = 0; i < player.sets().size(); ++i) first[i].push_back(player.last(i).T_PO);
   }
-  for (std::size_t i = 0; i < pipeline.sets().size(); ++i) first_P.push_back(pipeline.tracker(i).covariance());
+  for (std::size_t i = 0; i < player.sets().size(); ++i) first_P.push_back(player.tracker(i).covariance());
 
-  pipeline.Restore(checkpoint);
+  player.Restore(checkpoint);
   int frames = 0;
   for (int k = mid; k < end; ++k) {
-    pipeline.Step(k);
-    frames += pipeline.last_frame() >= 0;
-    for (std::size_t i = 0; i < pipeline.sets().size(); ++i) {
+    player.Step(k);
+    frames += player.last_frame() >= 0;
+    for (std::size_t i = 0; i < player.sets().size(); ++i) {
       const Transform& a = first[i][static_cast<std::size_t>(k - mid)];
-      const Transform& b = pipeline.last(i).T_PO;
-      ASSERT_EQ(a.matrix(), b.matrix()) << pipeline.sets()[i].name << " at sample " << k;
+      const Transform& b = player.last(i).T_PO;
+      ASSERT_EQ(a.matrix(), b.matrix()) << player.sets()[i].name << " at sample " << k;
     }
   }
-  for (std::size_t i = 0; i < pipeline.sets().size(); ++i) EXPECT_EQ(first_P[i], pipeline.tracker(i).covariance());
+  for (std::size_t i = 0; i < player.sets().size(); ++i) EXPECT_EQ(first_P[i], player.tracker(i).covariance());
   // The stretch replayed must hold camera frames, or the test would not cover the visual step.
   EXPECT_GE(frames, 8);
 }
