@@ -156,16 +156,15 @@ struct Tracker::Impl {
       early.insert(it, std::move(job));
       return;
     }
-    if (!options.threaded) {
-      if (t_c < last_t - options.horizon - kTimeTolerance) return DropLate();
-      Process(t_c, image, T_PC, K);
-      return;
-    }
+    if (BeyondHorizon(t_c)) return DropLate();
+    if (!options.threaded) return Process(t_c, image, T_PC, K);  // no copy of the image
     Submit(Job{t_c, image, T_PC, K});
   }
 
+  bool BeyondHorizon(double t_c) const { return t_c < last_t - options.horizon - kTimeTolerance; }
+
   void Submit(Job job) {
-    if (job.t_capture < last_t - options.horizon - kTimeTolerance) return DropLate();
+    if (BeyondHorizon(job.t_capture)) return DropLate();
     if (!options.threaded) {
       Process(job.t_capture, job.image, job.T_PC, job.K);
       return;
@@ -244,11 +243,20 @@ struct Tracker::Impl {
     }
   }
 
+  static void Apply(Filter& f, const VisualUpdate& u) { f.UpdateVisual(u.features, u.T_PC, u.K); }
+
   void Replay(Filter& f, Slot& s) {
     f.Predict(s.q, s.dt);
     f.UpdateContacts(s.tau);
     s.after_sample = f.state();
-    for (const VisualUpdate& u : s.fused) f.UpdateVisual(u.features, u.T_PC, u.K);
+    for (const VisualUpdate& u : s.fused) Apply(f, u);
+  }
+
+  // Under the lock: the ring's samples [from, to] into the processor's copies (index k - a).
+  void CopyOut(long a, long from, long to) {
+    std::vector<Slot>& local = proc.local;
+    if (local.size() < static_cast<std::size_t>(to - a + 1)) local.resize(static_cast<std::size_t>(to - a + 1));
+    for (long k = from; k <= to; ++k) local[static_cast<std::size_t>(k - a)] = At(k);
   }
 
   // Fuses one image at its capture time (see the top of this file).
@@ -265,14 +273,13 @@ struct Tracker::Impl {
         return;
       }
       upto = last;
-      if (local.size() < static_cast<std::size_t>(upto - a + 1)) local.resize(static_cast<std::size_t>(upto - a + 1));
-      for (long k = a; k <= upto; ++k) local[static_cast<std::size_t>(k - a)] = At(k);
+      CopyOut(a, a, upto);
     }
     const auto start = std::chrono::steady_clock::now();
     f.Restore(local[0].after_sample);
     std::vector<VisualUpdate>& here = local[0].fused;
     std::size_t split = 0;
-    while (split < here.size() && here[split].t_capture <= t_c) f.UpdateVisual(here[split].features, here[split].T_PC, here[split].K), ++split;
+    while (split < here.size() && here[split].t_capture <= t_c) Apply(f, here[split++]);
 
     VisualStep& step = proc.step;
     step.tags.clear();
@@ -307,7 +314,7 @@ struct Tracker::Impl {
     step.t_capture = t_c;
     step.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     here.insert(here.begin() + static_cast<long>(split), fresh.begin(), fresh.end());
-    for (std::size_t i = split + fresh.size(); i < here.size(); ++i) f.UpdateVisual(here[i].features, here[i].T_PC, here[i].K);
+    for (std::size_t i = split + fresh.size(); i < here.size(); ++i) Apply(f, here[i]);
     for (long k = a + 1; k <= upto; ++k) Replay(f, local[static_cast<std::size_t>(k - a)]);
 
     // Catch up with the samples that arrived meanwhile, then write back and publish.
@@ -316,8 +323,7 @@ struct Tracker::Impl {
       if (last > upto) {
         const long from = upto + 1;
         upto = last;
-        if (local.size() < static_cast<std::size_t>(upto - a + 1)) local.resize(static_cast<std::size_t>(upto - a + 1));
-        for (long k = from; k <= upto; ++k) local[static_cast<std::size_t>(k - a)] = At(k);
+        CopyOut(a, from, upto);
         lock.unlock();
         for (long k = from; k <= upto; ++k) Replay(f, local[static_cast<std::size_t>(k - a)]);
         continue;

@@ -112,26 +112,7 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
 void Filter::Restore(const FilterState& state) {
   INHAND_CHECK(state.b.size() == m_ && state.P.rows() == na_ && state.P.cols() == na_,
                "filter state of another hand or parameters");
-  s_.p = state.p;
-  s_.R = state.R;
-  s_.b = state.b;
-  s_.xi = state.xi;
-  s_.P = state.P;
-  s_.q_prev = state.q_prev;
-  s_.q_eff = state.q_eff;
-  s_.have_prev = state.have_prev;
-  s_.grip = state.grip;
-  s_.max_grip = state.max_grip;
-  s_.active.assign(state.active.begin(), state.active.end());
-  s_.trace.t = state.trace.t;
-  s_.trace.contacts.assign(state.trace.contacts.begin(), state.trace.contacts.end());
-  s_.trace.visual.assign(state.trace.visual.begin(), state.trace.visual.end());
-  s_.trace.prediction_contacts = state.trace.prediction_contacts;
-  s_.trace.predicted_twist = state.trace.predicted_twist;
-  s_.trace.num_constraints = state.trace.num_constraints;
-  s_.trace.num_gated = state.trace.num_gated;
-  s_.trace.numeric_events = state.trace.numeric_events;
-  s_.trace.slipping = state.trace.slipping;
+  s_ = state;  // same sizes: Eigen and std::vector reuse their storage
   delta_.setZero();
   kin_.Update(hand_, s_.q_eff);
 }
