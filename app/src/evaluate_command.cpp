@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "inhand/app/commands.hpp"
+#include "inhand/app/modalities.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/filter/contact_model.hpp"
 #include "inhand/io/detail/json_fields.hpp"
@@ -75,13 +76,6 @@ Stat Stats(const std::vector<double>& v) {
   return s;
 }
 
-Rgb SetColour(const std::string& set) {
-  if (set == "j") return kColourJoints;
-  if (set == "jt") return kColourTorques;
-  if (set == "jta") return kColourTags;
-  if (set == "jtf") return kColourFeatures;
-  return kColourTruth;
-}
 
 // Fig. 7: change of x, y, z [mm] and roll, pitch, yaw [deg] over time (truth dashed black,
 // each set in its colour), from one run; and the terminal errors of all runs as bars.
@@ -145,7 +139,7 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
     for (const std::string set : {"j", "jt", "jta", "jtf", "truth"}) {
       auto it = series.find(set);
       if (it == series.end()) continue;
-      const Rgb c = SetColour(set);
+      const Rgb c = ModalityColour(set);
       const cv::Scalar col(c.r, c.g, c.b);
       cv::Point prev(-1, -1);
       int k = 0;
@@ -166,7 +160,7 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
   cv::putText(img, scenario + ": terminal errors over all seeds (left mm, right deg; paper colours)", cv::Point(60, 615),
               cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   for (const auto& [set, st] : bars) {
-    const Rgb c = SetColour(set);
+    const Rgb c = ModalityColour(set);
     const cv::Scalar col(c.r, c.g, c.b);
     const int hp = std::min(240, static_cast<int>(st.first.mean * scale_mm)), ho = std::min(240, static_cast<int>(st.second.mean * scale_deg));
     cv::rectangle(img, cv::Rect(x, base - hp, 30, hp), col, cv::FILLED);

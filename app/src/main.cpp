@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   auto* replay_cmd = cli.add_subcommand("replay", "Run the estimators over a session: estimates, summary, annotated video");
   replay_cmd->add_option("SESSION", replay.session, "session directory")->required();
   replay_cmd->add_option("--out", replay.out, "output directory (replaced when complete)")->required();
-  replay_cmd->add_option("--modalities", replay.modalities, "comma-separated sets: j (joints), jt (+ torques), jta (+ AprilTags), jtf (+ extracted features)");
+  replay_cmd->add_option("--modalities", replay.modalities, "comma-separated sets: j (joints) followed by any of t (+ torques), a (+ AprilTags), f (+ extracted features), e.g. j,jt,jta,jtf (default with torques) or j,ja,jf (without)");
   replay_cmd->add_option("--params", replay.params, "tracker parameters (JSON, as written to params.json)");
   replay_cmd->add_flag("--no-video", replay.no_video, "skip replay.mp4");
   replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");

@@ -12,8 +12,12 @@ SessionPlayer::SessionPlayer(const Session& session, const TrackerParams& params
     : session_(session), models_(LoadSessionModels(session, true)), params_(params), sets_(std::move(sets)) {
   params_.Validate();
   if (sets_.empty())
-    sets_ = ParseModalities(!session_.info().camera ? "j,jt" : models_.object.tags.empty() ? "j,jt,jtf" : "j,jt,jta,jtf");
+    sets_ = ParseModalities(DefaultModalities(session_.has_torques(), session_.info().camera.has_value(), !models_.object.tags.empty()));
   for (const ModalitySet& s : sets_) {
+    if (s.torque && !session_.has_torques())
+      throw InputError(session_.Resolve("joints.csv") + ": modality " + s.name +
+                       " needs joint torques, the session has no tau: columns (try " +
+                       DefaultModalities(false, session_.info().camera.has_value(), !models_.object.tags.empty()) + ")");
     if ((s.tags || s.features) && !session_.info().camera)
       throw InputError(session_.dir() + ": modality " + s.name + " needs camera images, the session has none");
     TrackerOptions options;
@@ -44,11 +48,11 @@ SessionPlayer::SessionPlayer(const Session& session, const TrackerParams& params
 }
 
 void SessionPlayer::Gather(int k) {
-  const auto q = session_.q(k), tau = session_.tau(k);
-  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) {
-    q_[static_cast<long>(j)] = q[models_.joint_columns[j]];
-    tau_[static_cast<long>(j)] = tau[models_.joint_columns[j]];
-  }
+  const auto q = session_.q(k);
+  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) q_[static_cast<long>(j)] = q[models_.joint_columns[j]];
+  if (!session_.has_torques()) return;  // tau_ stays zero: no set with t runs on such a session
+  const auto tau = session_.tau(k);
+  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) tau_[static_cast<long>(j)] = tau[models_.joint_columns[j]];
 }
 
 bool SessionPlayer::TruthCovers(double t) const {

@@ -237,40 +237,45 @@ Session Session::Load(const std::string& dir) {
   info.sigma_joint_bias = within(init["sigma_joint_bias"], 0.0, 2 * M_PI, "a number in [0, 2 pi] rad");
   if (root.Has("provenance")) info.provenance_json = root["provenance"].value.dump();
 
-  // joints.csv: t, q:<joint>..., tau:<joint>... Parsed row by row into flat buffers.
-  std::size_t m = 0;
+  // joints.csv: t, q:<joint>..., then tau:<joint>... for the same joints or no torque columns at
+  // all (hands without torque sensors). Parsed row by row into flat buffers.
+  std::size_t m = 0, m_tau = 0;
   std::vector<double> q_rows, tau_rows;
   TimeColumn joint_time;
   const Csv joints = ReadCsv((fs::path(dir) / "joints.csv").string(), [&](const Csv& csv, const CsvRow& row) {
     if (m == 0) {  // the header, checked at the first row
       if (csv.header.empty() || csv.header[0] != "t") throw InputError(csv.file + ":1: first column must be 't'");
-      const std::size_t m2 = csv.header.size() - 1;
-      if (m2 == 0 || m2 % 2 != 0)
+      while (1 + m < csv.header.size() && csv.header[1 + m].rfind("q:", 0) == 0) ++m;
+      const std::size_t rest = csv.header.size() - 1 - m;
+      if (m == 0 || (rest != 0 && rest != m))
         throw InputError(csv.file + ":1: expected t, then q:NAME for every joint, then tau:NAME for "
-                         "every joint (got " + std::to_string(m2) + " columns after t)");
-      m = m2 / 2;
+                         "every joint or no torque columns (got " + std::to_string(m) + " q: and " +
+                         std::to_string(rest) + " other columns after t)");
+      m_tau = rest;
       for (std::size_t j = 0; j < m; ++j) {
         const std::string& qh = csv.header[1 + j];
-        const std::string& th = csv.header[1 + m + j];
-        if (qh.rfind("q:", 0) != 0 || qh.size() < 3)
+        if (qh.size() < 3)
           throw InputError(csv.file + ":1: column " + std::to_string(2 + j) + " is '" + qh + "', expected q:NAME");
         const std::string name = qh.substr(2);
-        if (th != "tau:" + name)
-          throw InputError(csv.file + ":1: column " + std::to_string(2 + m + j) + " is '" + th +
-                           "', expected 'tau:" + name + "' (torques in the order of the positions)");
+        if (m_tau > 0) {
+          const std::string& th = csv.header[1 + m + j];
+          if (th != "tau:" + name)
+            throw InputError(csv.file + ":1: column " + std::to_string(2 + m + j) + " is '" + th +
+                             "', expected 'tau:" + name + "' (torques in the order of the positions)");
+        }
         s.joint_names_.push_back(name);
       }
     }
     s.t_.push_back(joint_time(csv, row));
     for (std::size_t j = 0; j < m; ++j) q_rows.push_back(ParseNumber(csv, row, 1 + j));
-    for (std::size_t j = 0; j < m; ++j) tau_rows.push_back(ParseNumber(csv, row, 1 + m + j));
+    for (std::size_t j = 0; j < m_tau; ++j) tau_rows.push_back(ParseNumber(csv, row, 1 + m + j));
   });
   if (joints.rows == 0) throw InputError(joints.file + ": no samples");
   const long n = joints.rows;
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   s.q_ = Eigen::Map<const RowMajor>(q_rows.data(), n, static_cast<long>(m));
   std::vector<double>().swap(q_rows);
-  s.tau_ = Eigen::Map<const RowMajor>(tau_rows.data(), n, static_cast<long>(m));
+  s.tau_ = Eigen::Map<const RowMajor>(tau_rows.data(), n, static_cast<long>(m_tau));
   std::vector<double>().swap(tau_rows);
   s.t_.shrink_to_fit();
 
@@ -374,8 +379,8 @@ SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes)
 // -----------------------------------------------------------------------------------------------
 
 SessionWriter::SessionWriter(std::string dir, SessionInfo info, std::vector<std::string> joint_names,
-                             bool overwrite)
-    : dir_(std::move(dir)), info_(std::move(info)), joint_names_(std::move(joint_names)), overwrite_(overwrite) {
+                             bool overwrite, bool torques)
+    : dir_(std::move(dir)), info_(std::move(info)), joint_names_(std::move(joint_names)), overwrite_(overwrite), torques_(torques) {
   if (joint_names_.empty()) throw InputError("session writer: no joints");
   if (fs::exists(fs::absolute(dir_)) && !overwrite_)
     throw InputError(dir_ + ": already exists (pass overwrite to replace it)");
@@ -386,7 +391,8 @@ SessionWriter::SessionWriter(std::string dir, SessionInfo info, std::vector<std:
   if (ec) throw InputError(tmp_ + ": cannot create (" + ec.message() + ")");
   joints_csv_ = "t";
   for (const auto& n : joint_names_) joints_csv_ += ",q:" + n;
-  for (const auto& n : joint_names_) joints_csv_ += ",tau:" + n;
+  if (torques_)
+    for (const auto& n : joint_names_) joints_csv_ += ",tau:" + n;
   joints_csv_ += "\n";
   camera_csv_ = "t,image";
   groundtruth_csv_ = "t";
@@ -404,8 +410,8 @@ SessionWriter::~SessionWriter() {
 
 void SessionWriter::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
                                    const Eigen::Ref<const Eigen::VectorXd>& tau) {
-  INHAND_CHECK(q.size() == static_cast<long>(joint_names_.size()) && tau.size() == q.size(),
-               "joint sample size does not match the joint names");
+  INHAND_CHECK(q.size() == static_cast<long>(joint_names_.size()) && tau.size() == (torques_ ? q.size() : 0),
+               "joint sample size does not match the joint names (or torques given to a torque-free session)");
   INHAND_CHECK(t > last_joint_t_, "joint samples must be added in increasing time");
   last_joint_t_ = t;
   joints_csv_ += FormatDouble(t);

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "inhand/app/player.hpp"
+#include "inhand/core/error.hpp"
 #include "inhand/sessions/session.hpp"
 
 #include "test_support.hpp"
@@ -66,6 +69,86 @@ TEST(SessionPlayer, VisualRecordsOfTagsAndFeatures) {
     }
   }
   EXPECT_GE(frames, 5);  // frames where jta fused tag corners
+}
+
+// Modality sets are j plus any of t, a, f; one canonical name per combination, a distinct colour
+// for each, and errors that say what was expected.
+TEST(Modalities, EveryCombinationParsesToOneNameAndColour) {
+  const std::vector<app::ModalitySet> sets = app::ParseModalities("j,jt,ja,jf,jat,jtf,jfa,jfat");
+  const std::vector<std::string> names = {"j", "jt", "ja", "jf", "jta", "jtf", "jaf", "jtaf"};
+  ASSERT_EQ(sets.size(), names.size());
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    EXPECT_EQ(sets[i].name, names[i]);
+    EXPECT_EQ(sets[i].torque, names[i].find('t') != std::string::npos);
+    EXPECT_EQ(sets[i].tags, names[i].find('a') != std::string::npos);
+    EXPECT_EQ(sets[i].features, names[i].find('f') != std::string::npos);
+    for (std::size_t k = 0; k < i; ++k) {
+      const Rgb a = sets[i].colour, b = sets[k].colour;
+      EXPECT_GT(std::abs(a.r - b.r) + std::abs(a.g - b.g) + std::abs(a.b - b.b), 60) << names[i] << " vs " << names[k];
+    }
+  }
+  // The paper's four keep the paper's colours.
+  EXPECT_EQ(sets[1].colour.b, kColourTorques.b);
+  EXPECT_EQ(sets[5].colour.g, kColourFeatures.g);
+  for (const char* bad : {"", "t", "jx", "jtt", "j,ja,aj"}) EXPECT_THROW(app::ParseModalities(bad), InputError) << bad;
+  EXPECT_THROW(app::ParseModalities("ja,jaa"), InputError);
+  EXPECT_THROW(app::ParseModalities("jta,jat"), InputError);  // the same set twice
+  EXPECT_EQ(app::DefaultModalities(true, true, true), "j,jt,jta,jtf");
+  EXPECT_EQ(app::DefaultModalities(false, true, true), "j,ja,jf");
+  EXPECT_EQ(app::DefaultModalities(false, false, true), "j");
+}
+
+// A hand without torque sensors: the same recording with its tau: columns removed replays j
+// bit-identically (torques never reach j), runs ja and jf by default, and refuses jt.
+TEST(SessionPlayer, TorqueFreeSessionRunsJointsTagsAndFeatures) {
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 6 --out " + (dir / "session")).exit_code, 0);
+  const Session sim = Session::Load(dir / "session");
+  // Two copies through the same writer (a session.json round trip rounds the initial pose),
+  // with and without the torque columns.
+  for (const bool torques : {true, false}) {
+    SessionInfo info = sim.info();  // the models stay where the simulator put them
+    info.hand_urdf = sim.Resolve(info.hand_urdf);
+    info.object = sim.Resolve(info.object);
+    for (auto& [name, path] : info.packages) path = sim.Resolve(path);
+    SessionWriter w(dir / (torques ? "with_tau" : "no_tau"), info, sim.joint_names(), false, torques);
+    for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(sim.t(k), sim.q(k), torques ? Eigen::VectorXd(sim.tau(k)) : Eigen::VectorXd());
+    for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
+      w.AddCameraFrame(sim.camera_frames()[i].t, sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
+    for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(g.t, g.T_PO);
+    w.Commit();
+  }
+  const Session full = Session::Load(dir / "with_tau");
+  const Session bare = Session::Load(dir / "no_tau");
+  EXPECT_TRUE(full.has_torques());
+  EXPECT_FALSE(bare.has_torques());
+  {
+    std::ifstream in(dir / "no_tau/joints.csv");
+    std::string header;
+    std::getline(in, header);
+    EXPECT_EQ(header.find("tau:"), std::string::npos) << header;
+  }
+  SessionPlayer a(full, TrackerParams(), app::ParseModalities("j"));
+  SessionPlayer b(bare, TrackerParams());
+  ASSERT_EQ(b.sets().size(), 3u);
+  EXPECT_EQ(b.sets()[1].name, "ja");
+  EXPECT_EQ(b.sets()[2].name, "jf");
+  const int n = 1500;
+  int frames = 0;
+  for (int k = 0; k < n; ++k) {
+    a.Step(k);
+    b.Step(k);
+    ASSERT_EQ(a.last(0).T_PO.matrix(), b.last(0).T_PO.matrix()) << "sample " << k;
+    frames += b.last_frame() >= 0 && b.last(1).visual_used > 0;
+  }
+  EXPECT_GE(frames, 5);  // ja fused tag corners
+  try {
+    SessionPlayer c(bare, TrackerParams(), app::ParseModalities("j,jt"));
+    ADD_FAILURE() << "jt on a session without torques";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("needs joint torques"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("j,ja,jf"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

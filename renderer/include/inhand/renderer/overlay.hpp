@@ -19,6 +19,12 @@ constexpr Rgb kColourTorques{31, 119, 220};
 constexpr Rgb kColourTags{255, 140, 0};
 constexpr Rgb kColourFeatures{44, 160, 44};
 constexpr Rgb kColourTruth{0, 0, 0};
+// The other combinations of j with t, a, f (hands without torque sensors: ja, jf), distinct
+// from the paper's four and from each other.
+constexpr Rgb kColourJointsTags{148, 103, 189};          // ja: purple
+constexpr Rgb kColourJointsFeatures{140, 86, 75};        // jf: brown
+constexpr Rgb kColourJointsTagsFeatures{227, 119, 194};  // jaf: pink
+constexpr Rgb kColourAll{23, 190, 207};                  // jtaf: cyan
 
 struct OverlayLayers {
   bool silhouette = true;   // translucent fill

@@ -55,6 +55,8 @@ class Session {
   int num_samples() const { return static_cast<int>(t_.size()); }
   double t(int k) const { return t_[k]; }
   Eigen::Ref<const Eigen::VectorXd> q(int k) const { return q_.row(k).transpose(); }
+  // Joint torques, when joints.csv has tau: columns (hands without torque sensors have none).
+  bool has_torques() const { return tau_.cols() > 0; }
   Eigen::Ref<const Eigen::VectorXd> tau(int k) const { return tau_.row(k).transpose(); }
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& q_all() const { return q_; }
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& tau_all() const { return tau_; }
@@ -97,8 +99,9 @@ SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes 
 // writer removes the temporary directory.
 class SessionWriter {
  public:
+  // `torques` false: joints.csv gets no tau: columns, and AddJointSample takes an empty tau.
   SessionWriter(std::string dir, SessionInfo info, std::vector<std::string> joint_names,
-                bool overwrite = false);
+                bool overwrite = false, bool torques = true);
   ~SessionWriter();
   SessionWriter(const SessionWriter&) = delete;
   SessionWriter& operator=(const SessionWriter&) = delete;
@@ -120,6 +123,7 @@ class SessionWriter {
   SessionInfo info_;
   std::vector<std::string> joint_names_;
   bool overwrite_;
+  bool torques_;
   bool committed_ = false;
   std::string joints_csv_, camera_csv_, groundtruth_csv_;
   int num_frames_ = 0;
