@@ -37,6 +37,29 @@ int main(int argc, char** argv) {
   simulate_cmd->add_flag("--overwrite", simulate.overwrite, "replace an existing session directory");
   simulate_cmd->add_flag("--no-images", simulate.no_images, "joints and ground truth only (fast)");
 
+  inhand::app::ImportCommand import;
+  auto* import_cmd = cli.add_subcommand("import", "Import a ROS recording (ROS 1 bag, ROS 2 MCAP or .db3) into a session");
+  import_cmd->add_option("RECORDING", import.recording, "the .bag, .mcap or .db3 file (or a ROS 2 bag folder)")->required();
+  import_cmd->add_flag("--list", import.list, "list the topics (type, count, rate) and the TF frames, and stop");
+  import_cmd->add_option("--out", import.out, "session directory to write");
+  import_cmd->add_flag("--overwrite", import.overwrite, "replace an existing session directory");
+  import_cmd->add_option("--hand", import.hand, "the hand's URDF (joint names are matched to it)");
+  import_cmd->add_option("--object", import.object, "the object model (object JSON or single-link URDF)");
+  import_cmd->add_option("--package", import.packages, "package:// resolution NAME=DIR (repeatable)");
+  import_cmd->add_option("--joints", import.joints, "sensor_msgs/JointState topic (default: the only one)");
+  import_cmd->add_option("--effort-is", import.effort_is, "external: JointState effort is the external joint torque; none: no torques")->capture_default_str();
+  import_cmd->add_option("--image", import.image, "sensor_msgs/Image or CompressedImage topic (default: the only one)");
+  import_cmd->add_flag("--no-images", import.no_images, "import joints (and ground truth) only");
+  import_cmd->add_option("--camera-info", import.camera_info, "sensor_msgs/CameraInfo topic (default: beside the image topic)");
+  import_cmd->add_option("--palm-frame", import.palm_frame, "TF frame of the URDF's root link (default: the root link's name)");
+  import_cmd->add_option("--camera-frame", import.camera_frame, "TF frame of the camera (default: the images' frame_id)");
+  import_cmd->add_option("--object-pose", import.object_pose, "ground truth: PoseStamped, TransformStamped or Odometry topic");
+  import_cmd->add_option("--initial-pose", import.initial_pose, "x,y,z,qw,qx,qy,qz in the palm frame (default: the first ground truth)");
+  import_cmd->add_option("--initial-sigma", import.initial_sigma, "POS_M,ORIENT_RAD,BIAS_RAD (default 0.02,0.087,0.087)");
+  import_cmd->add_option("--start", import.start, "seconds after the first joint sample to start at");
+  import_cmd->add_option("--end", import.end, "seconds after the first joint sample to end at");
+  import_cmd->add_option("--time-origin", import.time_origin, "stamp [s since the epoch] that becomes t = 0 (default: the first joint sample's)");
+
   inhand::app::ReplayCommand replay;
   auto* replay_cmd = cli.add_subcommand("replay", "Run the estimators over a session: estimates, summary, annotated video");
   replay_cmd->add_option("SESSION", replay.session, "session directory")->required();
@@ -89,6 +112,7 @@ int main(int argc, char** argv) {
     if (*model_cmd) return inhand::app::RunModel(model);
     if (*compare_cmd) return inhand::app::RunCompare(compare);
     if (*simulate_cmd) return inhand::app::RunSimulate(simulate);
+    if (*import_cmd) return inhand::app::RunImport(import);
     if (*replay_cmd) return inhand::app::RunReplay(replay);
     if (*tags_cmd) return inhand::app::RunTags(tags);
     if (*match_cmd) return inhand::app::RunMatch(match);

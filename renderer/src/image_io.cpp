@@ -92,4 +92,30 @@ void WriteImage(const std::string& path, const Image8& image) {
   if (!ok) throw InputError(path + ": cannot write image");
 }
 
+Image8 DecodeImage(const std::uint8_t* data, std::size_t size, const std::string& context) {
+  cv::Mat bgr;
+  try {
+    const cv::Mat raw(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
+    bgr = cv::imdecode(raw, cv::IMREAD_COLOR);
+  } catch (const cv::Exception& e) {
+    throw InputError(context + ": not a readable image (" + e.err + ")");
+  }
+  if (bgr.empty()) throw InputError(context + ": not a readable image (unknown format, truncated or corrupt)");
+  Image8 out(bgr.cols, bgr.rows, 3);
+  cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  return out;
+}
+
+std::vector<std::uint8_t> EncodePng(const Image8& image) {
+  INHAND_CHECK(image.channels == 1 || image.channels == 3, "EncodePng takes RGB or grey images");
+  const cv::Mat in(image.height, image.width, image.channels == 1 ? CV_8UC1 : CV_8UC3, const_cast<std::uint8_t*>(image.data.data()));
+  cv::Mat bgr;
+  if (image.channels == 3) cv::cvtColor(in, bgr, cv::COLOR_RGB2BGR);
+  else bgr = in;
+  std::vector<std::uint8_t> out;
+  cv::imencode(".png", bgr, out, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  return out;
+}
+
 }  // namespace inhand

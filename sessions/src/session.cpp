@@ -431,6 +431,16 @@ void SessionWriter::AddCameraFrame(double t, const Image8& image, const Transfor
   camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
 }
 
+void SessionWriter::AddEncodedCameraFrame(double t, const std::vector<std::uint8_t>& bytes, const std::string& extension,
+                                          const Transform& T_PC) {
+  INHAND_CHECK(info_.camera.has_value(), "camera frames need camera intrinsics in SessionInfo");
+  INHAND_CHECK(extension == "png" || extension == "jpg", "encoded frames are png or jpg");
+  char name[64];
+  std::snprintf(name, sizeof(name), "images/frame_%06d.%s", num_frames_++, extension.c_str());
+  WriteText(fs::path(tmp_) / name, std::string(bytes.begin(), bytes.end()));
+  camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
+}
+
 void SessionWriter::AddGroundTruth(double t, const Transform& T_PO) {
   groundtruth_csv_ += FormatDouble(t) + PoseFields(T_PO) + "\n";
 }

@@ -2,6 +2,7 @@
 // The CLI's commands as plain functions (main.cpp only parses arguments with CLI11).
 // Each returns the process exit code; bad input surfaces as InputError, which main turns into
 // one line on stderr and exit code 2.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,21 @@ struct SimulateCommand {
   bool no_images = false;
 };
 int RunSimulate(const SimulateCommand& cmd);
+
+struct ImportCommand {
+  std::string recording;
+  bool list = false;
+  std::string out;
+  bool overwrite = false;
+  std::string hand, object;
+  std::vector<std::string> packages;  // NAME=DIR
+  std::string joints, effort_is = "none", image, camera_info, palm_frame, camera_frame, object_pose;
+  bool no_images = false;
+  std::string initial_pose;   // x,y,z,qw,qx,qy,qz
+  std::string initial_sigma;  // POS_M,ORIENT_RAD,BIAS_RAD
+  std::optional<double> start, end, time_origin;
+};
+int RunImport(const ImportCommand& cmd);
 
 struct ReplayCommand {
   std::string session;

@@ -110,6 +110,10 @@ class SessionWriter {
                       const Eigen::Ref<const Eigen::VectorXd>& tau);
   // Writes images/frame_NNNNNN.png at once.
   void AddCameraFrame(double t, const Image8& image, const Transform& T_PC);
+  // Writes images/frame_NNNNNN.EXT (png or jpg) with bytes already encoded (an importer keeps a
+  // recording's compressed images as they are); the caller has checked they decode to an image
+  // of the intrinsics' size.
+  void AddEncodedCameraFrame(double t, const std::vector<std::uint8_t>& bytes, const std::string& extension, const Transform& T_PC);
   void AddGroundTruth(double t, const Transform& T_PO);
   // Any extra file (e.g. the simulator's true biases), relative to the session directory.
   void AddFile(const std::string& relative_path, const std::string& contents);

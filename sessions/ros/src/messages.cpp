@@ -1,0 +1,41 @@
+#include "inhand/ros/messages.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "inhand/core/error.hpp"
+
+namespace inhand::ros {
+
+std::string NormaliseTypeName(const std::string& type_name) {
+  const std::size_t a = type_name.find("/msg/");
+  if (a == std::string::npos) return type_name;
+  return type_name.substr(0, a) + "/" + type_name.substr(a + 5);
+}
+
+MsgType MsgTypeOf(const std::string& type_name) {
+  const std::string t = NormaliseTypeName(type_name);
+  if (t == "sensor_msgs/JointState") return MsgType::kJointState;
+  if (t == "sensor_msgs/Image") return MsgType::kImage;
+  if (t == "sensor_msgs/CompressedImage") return MsgType::kCompressedImage;
+  if (t == "sensor_msgs/CameraInfo") return MsgType::kCameraInfo;
+  if (t == "tf2_msgs/TFMessage" || t == "tf/tfMessage") return MsgType::kTf;
+  if (t == "geometry_msgs/PoseStamped") return MsgType::kPoseStamped;
+  if (t == "geometry_msgs/TransformStamped") return MsgType::kTransformStamped;
+  if (t == "nav_msgs/Odometry") return MsgType::kOdometry;
+  return MsgType::kOther;
+}
+
+Quat MessageQuaternion(double w, double x, double y, double z, const std::string& context) {
+  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3) {
+    std::ostringstream s;
+    s << context << ": quaternion (w " << w << ", x " << x << ", y " << y << ", z " << z << ") is not a unit quaternion";
+    throw InputError(s.str());
+  }
+  // Exact unit quaternions stay bit-identical (a round trip through a recording is exact).
+  if (n == 1.0) return Quat(w, x, y, z);
+  return Quat(w / n, x / n, y / n, z / n);
+}
+
+}  // namespace inhand::ros
