@@ -66,7 +66,7 @@ int RunImport(const ImportCommand& cmd) {
     const auto v = Numbers(cmd.initial_pose, 7, "--initial-pose", "x,y,z,qw,qx,qy,qz (metres, unit quaternion; palm frame)");
     const double n = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
     if (std::abs(n - 1.0) > 1e-3) throw InputError("--initial-pose: the quaternion (" + std::to_string(v[3]) + ", ...) has norm " + std::to_string(n) + ", expected 1");
-    o.initial_pose = MakeTransform(Vec3(v[0], v[1], v[2]), Quat(v[3] / n, v[4] / n, v[5] / n, v[6] / n));
+    o.initial_pose = MakeTransform(Vec3(v[0], v[1], v[2]), Quat(v[3], v[4], v[5], v[6]));  // normalises, as session.json's reader does
   }
   if (!cmd.initial_sigma.empty()) {
     const auto v = Numbers(cmd.initial_sigma, 3, "--initial-sigma", "POS_M,ORIENT_RAD,BIAS_RAD");

@@ -154,13 +154,12 @@ std::vector<std::string> WithPoseColumns(std::vector<std::string> leading) {
   return leading;
 }
 
-std::string PoseFields(const Transform& T) {
-  const Quat q(T.linear());
-  const Vec3& p = T.translation();
+std::string PoseFields(const Vec3& p, const Quat& q) {
   std::string s;
   for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()}) s += "," + FormatDouble(v);
   return s;
 }
+std::string PoseFields(const Transform& T) { return PoseFields(T.translation(), Quat(T.linear())); }
 
 void WriteText(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
@@ -432,17 +431,21 @@ void SessionWriter::AddCameraFrame(double t, const Image8& image, const Transfor
 }
 
 void SessionWriter::AddEncodedCameraFrame(double t, const std::vector<std::uint8_t>& bytes, const std::string& extension,
-                                          const Transform& T_PC) {
+                                          const Vec3& p_PC, const Quat& q_PC) {
   INHAND_CHECK(info_.camera.has_value(), "camera frames need camera intrinsics in SessionInfo");
   INHAND_CHECK(extension == "png" || extension == "jpg", "encoded frames are png or jpg");
   char name[64];
   std::snprintf(name, sizeof(name), "images/frame_%06d.%s", num_frames_++, extension.c_str());
   WriteText(fs::path(tmp_) / name, std::string(bytes.begin(), bytes.end()));
-  camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
+  camera_csv_ += FormatDouble(t) + "," + name + PoseFields(p_PC, q_PC) + "\n";
 }
 
 void SessionWriter::AddGroundTruth(double t, const Transform& T_PO) {
   groundtruth_csv_ += FormatDouble(t) + PoseFields(T_PO) + "\n";
+}
+
+void SessionWriter::AddGroundTruth(double t, const Vec3& p_PO, const Quat& q_PO) {
+  groundtruth_csv_ += FormatDouble(t) + PoseFields(p_PO, q_PO) + "\n";
 }
 
 void SessionWriter::AddFile(const std::string& relative_path, const std::string& contents) {

@@ -75,9 +75,9 @@ class CdrReader {
     const double x = F64(), y = F64(), z = F64(), w = F64();
     return MessageQuaternion(w, x, y, z, context_);
   }
-  Transform Pose() {
+  ros::Pose ReadPose() {
     const Vec3 t = Vector3();
-    return MakeTransform(t, Quaternion());
+    return {t, Quaternion()};
   }
   [[noreturn]] void Fail(const std::string& what) const { throw InputError(context_ + ": " + what); }
 
@@ -145,7 +145,7 @@ Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool
       for (auto& t : m.transforms) {
         t.header = r.ReadHeader();
         t.child_frame_id = r.String();
-        t.T = r.Pose();
+        t.T = r.ReadPose();
       }
       return m;
     }
@@ -153,20 +153,20 @@ Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool
       StampedTransform t;
       t.header = r.ReadHeader();
       t.child_frame_id = r.String();
-      t.T = r.Pose();
+      t.T = r.ReadPose();
       return t;
     }
     case MsgType::kPoseStamped: {
       StampedTransform t;
       t.header = r.ReadHeader();
-      t.T = r.Pose();
+      t.T = r.ReadPose();
       return t;
     }
     case MsgType::kOdometry: {
       StampedTransform t;
       t.header = r.ReadHeader();
       t.child_frame_id = r.String();
-      t.T = r.Pose();
+      t.T = r.ReadPose();
       return t;  // covariance and twist are not used
     }
     case MsgType::kOther:

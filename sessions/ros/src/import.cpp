@@ -164,7 +164,7 @@ struct JointSample {
 struct FrameRef {
   std::int64_t stamp = 0;
   std::uint64_t message = 0;  // index among the image topic's messages
-  Transform T_PC;
+  Pose T_PC;
 };
 
 std::string Seconds(double s) {
@@ -427,7 +427,7 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   report.image_messages = image_stamps.size();
 
   // Ground truth in the palm frame.
-  std::vector<std::pair<std::int64_t, Transform>> gt;
+  std::vector<std::pair<std::int64_t, Pose>> gt;
   for (const StampedTransform& t : truth) {
     if (t.header.stamp_ns < lo || t.header.stamp_ns > hi) continue;
     if (t.header.frame_id != report.palm_frame) {
@@ -436,6 +436,10 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
       } catch (const InputError& e) {
         throw InputError(path + ": " + report.object_pose_topic + ": " + e.what());
       }
+    }
+    if (t.header.frame_id == report.palm_frame) {  // as recorded, digit for digit
+      gt.emplace_back(t.header.stamp_ns, t.T);
+      continue;
     }
     const auto T = tree.Lookup(report.palm_frame, t.header.frame_id, t.header.stamp_ns, true, ns_of(opt.max_tf_gap_s));
     if (!T) {
@@ -455,7 +459,7 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   info.object = fs::absolute(opt.object).lexically_normal().string();
   if (!frames.empty()) info.camera = K;
   if (opt.initial_pose) info.initial_T_PO = *opt.initial_pose;
-  else if (!gt.empty()) info.initial_T_PO = gt.front().second;
+  else if (!gt.empty()) info.initial_T_PO = gt.front().second.ToTransform();
   else
     throw InputError(path + ": no initial estimate of the object's pose: pass --initial-pose x,y,z,qw,qx,qy,qz (palm frame) or a ground-truth topic with --object-pose");
   if (opt.initial_sigma) {
@@ -479,7 +483,7 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   for (const JointSample& s : joints)
     writer.AddJointSample(t_of(s.stamp), Eigen::Map<const Eigen::VectorXd>(s.q.data(), static_cast<long>(s.q.size())),
                           Eigen::Map<const Eigen::VectorXd>(s.tau.data(), static_cast<long>(s.tau.size())));
-  for (const auto& [stamp, T] : gt) writer.AddGroundTruth(t_of(stamp), T);
+  for (const auto& [stamp, T] : gt) writer.AddGroundTruth(t_of(stamp), T.p, T.q);
 
   // Pass 2: the images, encoded on every core, written in stamp order.
   if (!frames.empty()) {
@@ -495,7 +499,7 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
         if (!wait_for_one && it->second.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
         const Encoded e = it->second.get();
         pending.erase(it);
-        writer.AddEncodedCameraFrame(t_of(frames[next].stamp), e.bytes, e.extension, frames[next].T_PC);
+        writer.AddEncodedCameraFrame(t_of(frames[next].stamp), e.bytes, e.extension, frames[next].T_PC.p, frames[next].T_PC.q);
         ++next;
         wait_for_one = false;
       }

@@ -33,8 +33,8 @@ Quat MessageQuaternion(double w, double x, double y, double z, const std::string
     s << context << ": quaternion (w " << w << ", x " << x << ", y " << y << ", z " << z << ") is not a unit quaternion";
     throw InputError(s.str());
   }
-  // Exact unit quaternions stay bit-identical (a round trip through a recording is exact).
-  if (n == 1.0) return Quat(w, x, y, z);
+  // Unit to rounding: kept bit-identical (a round trip through a recording is exact).
+  if (std::abs(n - 1.0) <= 1e-9) return Quat(w, x, y, z);
   return Quat(w / n, x / n, y / n, z / n);
 }
 

@@ -21,11 +21,11 @@ namespace {
 
 Header Convert(const std_msgs::Header& h) { return {static_cast<std::int64_t>(h.stamp.toNSec()), h.frame_id}; }
 
-Transform Convert(const geometry_msgs::Vector3& t, const geometry_msgs::Quaternion& q, const std::string& context) {
-  return MakeTransform(Vec3(t.x, t.y, t.z), MessageQuaternion(q.w, q.x, q.y, q.z, context));
+Pose Convert(const geometry_msgs::Vector3& t, const geometry_msgs::Quaternion& q, const std::string& context) {
+  return {Vec3(t.x, t.y, t.z), MessageQuaternion(q.w, q.x, q.y, q.z, context)};
 }
-Transform Convert(const geometry_msgs::Point& t, const geometry_msgs::Quaternion& q, const std::string& context) {
-  return MakeTransform(Vec3(t.x, t.y, t.z), MessageQuaternion(q.w, q.x, q.y, q.z, context));
+Pose Convert(const geometry_msgs::Point& t, const geometry_msgs::Quaternion& q, const std::string& context) {
+  return {Vec3(t.x, t.y, t.z), MessageQuaternion(q.w, q.x, q.y, q.z, context)};
 }
 
 StampedTransform Convert(const geometry_msgs::TransformStamped& m, const std::string& context) {

@@ -71,45 +71,48 @@ void TfTree::RequireConnected(const std::string& a_in, const std::string& b_in) 
                    list(Component(b)) + "}" + (edges_.empty() ? " (the recording has no /tf or /tf_static)" : ""));
 }
 
-std::optional<Transform> TfTree::EdgeAt(const std::string& child, const Edge& e, std::int64_t t, bool soft, std::int64_t max_ns) const {
+std::optional<Pose> TfTree::EdgeAt(const std::string& child, const Edge& e, std::int64_t t, bool soft, std::int64_t max_ns) const {
   if (e.is_static) return e.fixed;
   const auto& s = e.series;
-  const auto fail = [&](std::int64_t gap) -> std::optional<Transform> {
+  const auto fail = [&](std::int64_t gap) -> std::optional<Pose> {
     if (soft) return std::nullopt;
     throw InputError("TF " + e.parent + " -> " + child + " has no transform within " + std::to_string(max_ns / 1000000) +
                      " ms of t = " + std::to_string(t) + " ns (nearest " + std::to_string(gap / 1000000) + " ms away)");
   };
   auto hi = std::lower_bound(s.begin(), s.end(), t, [](const auto& a, std::int64_t v) { return a.first < v; });
   if (hi != s.end() && hi->first == t) return hi->second;  // exact: no arithmetic
-  if (hi == s.begin()) return s.front().first - t <= max_ns ? std::optional<Transform>(s.front().second) : fail(s.front().first - t);
-  if (hi == s.end()) return t - s.back().first <= max_ns ? std::optional<Transform>(s.back().second) : fail(t - s.back().first);
+  if (hi == s.begin()) return s.front().first - t <= max_ns ? std::optional<Pose>(s.front().second) : fail(s.front().first - t);
+  if (hi == s.end()) return t - s.back().first <= max_ns ? std::optional<Pose>(s.back().second) : fail(t - s.back().first);
   const auto& lo = *(hi - 1);
   const double a = static_cast<double>(t - lo.first) / static_cast<double>(hi->first - lo.first);
-  const Quat q0(lo.second.linear()), q1(hi->second.linear());
-  return MakeTransform((1 - a) * lo.second.translation() + a * hi->second.translation(), q0.slerp(a, q1));
+  return Pose{(1 - a) * lo.second.p + a * hi->second.p, lo.second.q.slerp(a, hi->second.q)};
 }
 
-std::optional<Transform> TfTree::Lookup(const std::string& base_in, const std::string& frame_in, std::int64_t t_ns, bool soft,
+std::optional<Pose> TfTree::Lookup(const std::string& base_in, const std::string& frame_in, std::int64_t t_ns, bool soft,
                                         std::int64_t max_ns) const {
   const std::string base = Strip(base_in), frame = Strip(frame_in);
-  if (base == frame) return Transform::Identity();
+  if (base == frame) return Pose();
   RequireConnected(base, frame);
   // Up from each to the common ancestor: T_base_frame = (T_root_base)^-1 T_root_frame, with the
   // shared part of the chains cancelled.
   std::vector<std::string> a = ToRoot(base), b = ToRoot(frame);
   while (a.size() > 1 && b.size() > 1 && a[a.size() - 2] == b[b.size() - 2]) a.pop_back(), b.pop_back();
-  const auto up = [&](const std::vector<std::string>& chain) -> std::optional<Transform> {
-    Transform T = Transform::Identity();  // pose of chain[0] in chain.back()
+  // Pose of chain[0] in chain.back(); a chain of one frame is the identity (no arithmetic, so a
+  // single edge comes out exactly as recorded).
+  const auto up = [&](const std::vector<std::string>& chain) -> std::optional<Pose> {
+    std::optional<Pose> T;
     for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
       const auto e = EdgeAt(chain[i], edges_.at(chain[i]), t_ns, soft, max_ns);
       if (!e) return std::nullopt;
-      T = *e * T;
+      T = T ? *e * *T : *e;
     }
-    return T;
+    return T ? T : Pose();
   };
   const auto Ta = up(a), Tb = up(b);
   if (!Ta || !Tb) return std::nullopt;
-  return Ta->inverse() * *Tb;
+  if (a.size() == 1) return Tb;
+  if (b.size() == 1) return Ta->Inverse();
+  return Ta->Inverse() * *Tb;
 }
 
 }  // namespace inhand::ros

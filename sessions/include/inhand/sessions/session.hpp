@@ -113,8 +113,11 @@ class SessionWriter {
   // Writes images/frame_NNNNNN.EXT (png or jpg) with bytes already encoded (an importer keeps a
   // recording's compressed images as they are); the caller has checked they decode to an image
   // of the intrinsics' size.
-  void AddEncodedCameraFrame(double t, const std::vector<std::uint8_t>& bytes, const std::string& extension, const Transform& T_PC);
+  // The pose as translation + quaternion, written digit for digit (an importer passes them on).
+  void AddEncodedCameraFrame(double t, const std::vector<std::uint8_t>& bytes, const std::string& extension, const Vec3& p_PC,
+                             const Quat& q_PC);
   void AddGroundTruth(double t, const Transform& T_PO);
+  void AddGroundTruth(double t, const Vec3& p_PO, const Quat& q_PO);
   // Any extra file (e.g. the simulator's true biases), relative to the session directory.
   void AddFile(const std::string& relative_path, const std::string& contents);
   void Commit();

@@ -48,12 +48,26 @@ struct CameraInfoMsg {  // sensor_msgs/CameraInfo (ROS 1 D, K, R, P are ROS 2's 
   std::array<double, 12> p{};
 };
 
+// A rigid transform kept as the message carries it (translation + quaternion), so that a pose
+// read from a recording and written into a session comes out digit for digit; composition and
+// inversion in quaternion arithmetic (exact when one side is the identity).
+struct Pose {
+  Vec3 p = Vec3::Zero();
+  Quat q = Quat::Identity();
+  Pose operator*(const Pose& o) const { return {p + q * o.p, q * o.q}; }
+  Pose Inverse() const {
+    const Quat qi = q.conjugate();
+    return {-(qi * p), qi};
+  }
+  Transform ToTransform() const { return MakeTransform(p, q); }  // normalises q
+};
+
 // A pose of `child_frame_id` in `header.frame_id`: geometry_msgs/TransformStamped (one entry of
 // tf2_msgs/TFMessage), geometry_msgs/PoseStamped (no child) or nav_msgs/Odometry's pose.
 struct StampedTransform {
   Header header;
   std::string child_frame_id;
-  Transform T = Transform::Identity();
+  Pose T;
 };
 
 struct TfMsg {  // tf2_msgs/TFMessage (ROS 1's tf/tfMessage has the same layout)
@@ -70,7 +84,7 @@ MsgType MsgTypeOf(const std::string& type_name);
 std::string NormaliseTypeName(const std::string& type_name);
 
 // A unit quaternion from a message, or an InputError naming `context` when it is not one
-// (within 1e-3: recorders round; it is then normalised).
+// (within 1e-3: recorders round; beyond 1e-9 it is normalised, closer it is kept as it is).
 Quat MessageQuaternion(double w, double x, double y, double z, const std::string& context);
 
 }  // namespace inhand::ros

@@ -1,0 +1,231 @@
+// inhand import, tested on recordings written by the official tools of each format (Debian's
+// rosbag writer; @mcap/core, @foxglove/rosmsg2-serialization and sql.js): the synthetic recording
+// of tests/ros/synthetic.mjs in five files, round trips of a simulated session, bad input, and
+// the real Allegro bag in ../shared/fixtures.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "inhand/core/error.hpp"
+#include "inhand/io/urdf_loader.hpp"
+#include "inhand/renderer/image_io.hpp"
+#include "inhand/ros/import.hpp"
+#include "inhand/ros/recording.hpp"
+#include "inhand/ros/tf_tree.hpp"
+#include "inhand/sessions/session.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace inhand {
+namespace {
+
+const std::vector<std::string> kFormats = {"synthetic.bag", "synthetic.mcap", "synthetic_zstd.mcap", "synthetic_lz4.mcap", "synthetic.db3"};
+std::string Fixture(const std::string& name) { return test::SourceDir() + "/tests/ros/fixtures/" + name; }
+const std::string kHand = test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf");
+const std::string kObject = test::ProjectAsset("objects/ketchup_bottle/object.json");
+
+std::string Import(const std::string& recording, const std::string& out, const std::string& extra = "") {
+  return "import " + recording + " --out " + out + " --hand " + kHand + " --object " + kObject + " " + extra;
+}
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The synthetic recording's poses (synthetic.mjs).
+Transform AboutZ(const Vec3& p, double a) { return MakeTransform(p, Quat(Eigen::AngleAxisd(a, Vec3::UnitZ()))); }
+Transform WorldPalm() { return AboutZ(Vec3(0.1, 0.2, 0.3), M_PI / 6); }
+Transform CameraLinkOptical() { return MakeTransform(Vec3::Zero(), Quat(0.5, -0.5, 0.5, -0.5)); }
+Transform WorldCameraLink(double s) { return AboutZ(Vec3(0.5 + 0.1 * s, -0.2, 0.4), 0.2 * s); }
+Transform WorldObject(double s) { return MakeTransform(Vec3(0.15, 0.2 + 0.05 * s, 0.35), Quat(Eigen::AngleAxisd(0.1 * s, Vec3::UnitX()))); }
+double PoseError(const Transform& a, const Transform& b) {
+  return std::max((a.translation() - b.translation()).norm(), LogSO3(a.linear().transpose() * b.linear()).norm());
+}
+
+// Every format's file imports to the recording the formulas describe, and to byte-identical
+// sessions: joints by name (arm joints ignored, the hand's in reverse order), out-of-order
+// stamps sorted, a duplicate dropped, images from rgb8, T_PC through a static + dynamic TF
+// chain interpolated between samples, ground truth moved from the world into the palm frame.
+TEST(Import, EveryFormatGivesTheSyntheticRecording) {
+  test::TempDir dir;
+  const HandModel hand = LoadHandModel(kHand, {{}, false});
+  const std::vector<std::string> names = hand.QNames();
+  std::string first_joints, first_camera, first_truth;
+  for (const std::string& format : kFormats) {
+    SCOPED_TRACE(format);
+    const std::string out = dir / format;
+    const test::CommandResult r =
+        test::RunInhand(Import(Fixture(format), out, "--image /camera/image_raw --object-pose /mocap/object --effort-is external"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("199 samples"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("1 duplicate stamps"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("1 out of order"), std::string::npos) << r.output;
+    const Session s = Session::Load(out);
+    ASSERT_EQ(s.joint_names(), names);
+    ASSERT_TRUE(s.has_torques());
+    ASSERT_EQ(s.num_samples(), 199);
+    int i = 0;
+    for (int kk = 0; kk < 200; ++kk) {
+      if (kk == 51) continue;                                // its stamp repeats 50's
+      const int k = kk == 100 ? 101 : kk == 101 ? 100 : kk;  // stamps 100 and 101 swapped
+      ASSERT_EQ(s.t(i), kk * 5000000 / 1e9) << i;
+      for (int j = 0; j < 16; ++j) {
+        ASSERT_EQ(s.q(i)[j], 0.1 + 0.02 * j + 0.001 * k) << names[j] << " sample " << i;
+        ASSERT_EQ(s.tau(i)[j], 0.01 * j - 0.0005 * k) << names[j] << " sample " << i;
+      }
+      ++i;
+    }
+    ASSERT_TRUE(s.info().camera.has_value());
+    const Intrinsics& K = *s.info().camera;
+    EXPECT_EQ(K.width, 64);
+    EXPECT_EQ(K.fx, 60.0);
+    EXPECT_EQ(K.cy, 23.5);
+    EXPECT_EQ(K.distortion[0], 0.01);
+    EXPECT_EQ(K.distortion[3], 0.0003);
+    ASSERT_EQ(s.camera_frames().size(), 10u);
+    double worst = 0;
+    for (int f = 0; f < 10; ++f) {
+      const double t = (f * 50000000 + 2500000) / 1e9;
+      EXPECT_EQ(s.camera_frames()[static_cast<std::size_t>(f)].t, t);
+      const Transform expected = WorldPalm().inverse() * WorldCameraLink(t) * CameraLinkOptical();
+      worst = std::max(worst, PoseError(expected, s.camera_frames()[static_cast<std::size_t>(f)].T_PC));
+      const Image8 img = s.LoadImage(f);
+      for (int y = 0; y < 48; y += 7)
+        for (int x = 0; x < 64; x += 5) {
+          const std::uint8_t* p = img.pixel(x, y);
+          ASSERT_EQ(p[0], (x * 4 + f * 7) & 255);
+          ASSERT_EQ(p[1], (y * 5 + f) & 255);
+          ASSERT_EQ(p[2], ((x ^ y) * 3) & 255);
+        }
+    }
+    EXPECT_LT(worst, 1e-9);
+    ASSERT_EQ(s.groundtruth().size(), 100u);
+    worst = 0;
+    for (int g = 0; g < 100; ++g) {
+      const double t = (g * 10000000 + 1000000) / 1e9;
+      EXPECT_EQ(s.groundtruth()[static_cast<std::size_t>(g)].t, t);
+      worst = std::max(worst, PoseError(WorldPalm().inverse() * WorldObject(t), s.groundtruth()[static_cast<std::size_t>(g)].T_PO));
+    }
+    EXPECT_LT(worst, 1e-9);
+    EXPECT_LT(PoseError(s.info().initial_T_PO, WorldPalm().inverse() * WorldObject(0.001)), 1e-9);
+    // The same bytes whichever writer made the recording.
+    if (first_joints.empty()) {
+      first_joints = ReadText(out + "/joints.csv"), first_camera = ReadText(out + "/camera.csv"), first_truth = ReadText(out + "/groundtruth.csv");
+    } else {
+      EXPECT_EQ(ReadText(out + "/joints.csv"), first_joints);
+      EXPECT_EQ(ReadText(out + "/camera.csv"), first_camera);
+      EXPECT_EQ(ReadText(out + "/groundtruth.csv"), first_truth);
+    }
+  }
+}
+
+// --list names every topic with its type, count and rate, and the TF tree.
+TEST(Import, ListShowsTopicsAndFrames) {
+  for (const std::string& format : {std::string("synthetic.bag"), std::string("synthetic_lz4.mcap"), std::string("synthetic.db3")}) {
+    const test::CommandResult r = test::RunInhand("import " + Fixture(format) + " --list");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (const char* want : {"/joint_states", "sensor_msgs/JointState", "200", "200.0", "/camera/image_raw", "sensor_msgs/Image",
+                             "camera_optical <- camera_link  (static)", "camera_link <- world  (101 transforms)", "palm <- world"})
+      EXPECT_NE(r.output.find(want), std::string::npos) << format << ": " << want << "\n" << r.output;
+  }
+}
+
+// A window and a time origin: --start/--end cut by the joint samples' clock; --time-origin
+// keeps the recording's own time.
+TEST(Import, WindowAndTimeOrigin) {
+  test::TempDir dir;
+  const test::CommandResult r = test::RunInhand(
+      Import(Fixture("synthetic.mcap"), dir / "s", "--no-images --initial-pose=-0.03,0.01,0.1,1,0,0,0 --start 0.1 --end 0.2 --time-origin 1700000000"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Session s = Session::Load(dir / "s");
+  EXPECT_FALSE(s.has_torques());
+  EXPECT_FALSE(s.info().camera.has_value());
+  ASSERT_EQ(s.num_samples(), 21);  // stamps 100 ms to 200 ms, 5 ms apart
+  EXPECT_EQ(s.t(0), 250000000 / 1e9 + 0.1);
+  EXPECT_NEAR(s.info().initial_T_PO.translation().x(), -0.03, 1e-15);
+}
+
+// Bad input: one clear line naming what is wrong, exit 2, and no output folder.
+TEST(Import, BadInputIsOneClearLineAndNoOutput) {
+  test::TempDir dir;
+  const std::string bag = Fixture("synthetic.bag"), mcap = Fixture("synthetic_zstd.mcap");
+  dir.Write("notabag.bag", "this is not a recording\n");
+  for (const auto& [name, size] : {std::pair<std::string, double>{"synthetic.bag", 0.6}, {"synthetic_zstd.mcap", 0.6}, {"synthetic.mcap", 0.3}}) {
+    const std::string all = ReadText(Fixture(name));
+    dir.Write("cut_" + name, all.substr(0, static_cast<std::size_t>(size * static_cast<double>(all.size()))));
+  }
+  dir.Write("finger.urdf",
+            "<robot name=\"finger\"><link name=\"palm\"/><link name=\"tip\"/><joint name=\"finger_joint\" type=\"revolute\">"
+            "<parent link=\"palm\"/><child link=\"tip\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>");
+  const std::string gt = "--object-pose /mocap/object";
+  struct Case {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {Import(dir / "notabag.bag", dir / "out", gt), "not a ROS recording"},
+      {Import(dir / "cut_synthetic.bag", dir / "out", "--image /camera/image_raw " + gt), "cut_synthetic.bag"},
+      {Import(dir / "cut_synthetic_zstd.mcap", dir / "out", "--image /camera/image_raw " + gt), "truncated or corrupt MCAP"},
+      {Import(dir / "cut_synthetic.mcap", dir / "out", "--image /camera/image_raw " + gt), "truncated or corrupt MCAP"},
+      {Import(bag, dir / "out", "--joints /nope " + gt), "--joints /nope: no such topic; the recording has /camera/camera_info"},
+      {Import(mcap, dir / "out", "--joints /camera/camera_info " + gt), "is of type sensor_msgs/CameraInfo, expected sensor_msgs/JointState"},
+      {Import(bag, dir / "out", "--image /camera3/image_raw " + gt), "image encoding 'yuv422' is not supported"},
+      {Import(mcap, dir / "out", "--image /camera2/image_raw " + gt), "image is 64x48, camera_info says 640x480"},
+      {Import(bag, dir / "out", "--image /camera/image_raw --camera-frame table_marker " + gt), "no TF path from 'palm' to 'table_marker'"},
+      {Import(mcap, dir / "out", "--image /camera/image_raw"), "no initial estimate"},
+      {Import(bag, dir / "out", gt), "several sensor_msgs/Image or sensor_msgs/CompressedImage topics"},
+      {"import " + bag + " --out " + (dir / "out") + " --hand " + (dir / "finger.urdf") + " --object " + kObject + " --no-images " + gt,
+       "the hand's joint finger_joint is not in the message, which names arm_joint_1, arm_joint_2, thumb_flex3"},
+      {Import(bag, dir / "out", "--no-images --initial-pose 1,2,3"), "--initial-pose: 3 numbers"},
+      {Import(bag, dir / "out", "--no-images --initial-pose=0,0,0,2,0,0,0"), "has norm 2"},
+      {Import(bag, dir / "out", "--no-images --effort-is measured " + gt), "--effort-is: 'measured'"},
+  };
+  for (const Case& c : cases) {
+    const test::CommandResult r = test::RunInhand(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\nexpected: " << c.expected << "\ngot: " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "out")) << c.args;
+  }
+  // Nothing left beside the target either (no staging folders).
+  for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename().string().find(".out"), std::string::npos) << e.path();
+}
+
+// The TF tree on its own: composition along both branches, interpolation, and the error that
+// names the two parts of a split tree.
+TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
+  ros::TfTree tree;
+  const auto add = [&](const std::string& parent, const std::string& child, std::int64_t t, const Transform& T, bool is_static) {
+    ros::StampedTransform s;
+    s.header.frame_id = parent;
+    s.header.stamp_ns = t;
+    s.child_frame_id = child;
+    s.T = {T.translation(), Quat(T.linear())};
+    tree.Add(s, is_static);
+  };
+  const Transform A = AboutZ(Vec3(1, 2, 3), 0.3), B = MakeTransform(Vec3(-1, 0.5, 0), ExpSO3(Vec3(0.1, -0.2, 0.3)));
+  add("world", "a", 0, A, true);
+  add("world", "b", 0, B, false);
+  add("world", "b", 1000, B * AboutZ(Vec3(0.1, 0, 0), 0.5), false);
+  add("island", "rock", 0, A, true);
+  tree.Finish();
+  const auto T = tree.Lookup("a", "b", 500);
+  ASSERT_TRUE(T.has_value());
+  EXPECT_LT(PoseError(T->ToTransform(), A.inverse() * B * AboutZ(Vec3(0.05, 0, 0), 0.25)), 1e-12);
+  EXPECT_LT(PoseError(tree.Lookup("b", "world", 0)->ToTransform(), B.inverse()), 1e-12);
+  try {
+    tree.Lookup("a", "rock", 0);
+    ADD_FAILURE() << "no error for a split tree";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("{a, b, world} and {island, rock}"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(tree.Lookup("a", "b", 5000000000LL, true).has_value());  // 5 s beyond the last sample
+}
+
+}  // namespace
+}  // namespace inhand
