@@ -1,1 +1,99 @@
+// Round trips: a simulated session written into a ROS 1 bag by Debian's rosbag writer and into
+// MCAP and .db3 by the official npm tools (tests/ros/session_to_ros*.{py,mjs}) imports back to
+// the same session, and its replay gives the same estimates, byte for byte.
+#include <gtest/gtest.h>
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "inhand/sessions/session.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace inhand {
+namespace {
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+int Shell(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
+
+// The simulated session made representable in a recording: times on whole nanoseconds (ROS
+// time's resolution), the initial pose a fixed point of quaternion -> matrix -> quaternion (its
+// text then survives any number of writes), models by absolute path.
+void WriteRepresentable(const Session& sim, const std::string& out) {
+  SessionInfo info = sim.info();
+  info.hand_urdf = sim.Resolve(info.hand_urdf);
+  info.object = sim.Resolve(info.object);
+  for (auto& [name, path] : info.packages) path = sim.Resolve(path);
+  Transform T = info.initial_T_PO;
+  for (int i = 0; i < 20; ++i) {
+    const Quat q(T.linear());
+    T = MakeTransform(T.translation(), q);
+    if (Quat(T.linear()).coeffs() == q.coeffs()) break;
+  }
+  info.initial_T_PO = T;
+  const auto ns = [](double t) { return static_cast<double>(std::llround(t * 1e9)) / 1e9; };
+  SessionWriter w(out, info, sim.joint_names());
+  for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(ns(sim.t(k)), sim.q(k), sim.tau(k));
+  for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
+    w.AddCameraFrame(ns(sim.camera_frames()[i].t), sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
+  for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(ns(g.t), g.T_PO);
+  w.Commit();
+}
+
+TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
+  const std::string tools = test::SourceDir() + "/tests/ros";
+  if (!fs::is_directory(tools + "/node/node_modules/@mcap/core"))
+    GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 3 --out " + (dir / "sim")).exit_code, 0);
+  WriteRepresentable(Session::Load(dir / "sim"), dir / "orig");
+  const Session orig = Session::Load(dir / "orig");
+  const Transform& T0 = orig.info().initial_T_PO;
+  const Quat q0(T0.linear());
+  std::string pose, sigma;
+  for (double v : {T0.translation().x(), T0.translation().y(), T0.translation().z(), q0.w(), q0.x(), q0.y(), q0.z()})
+    pose += (pose.empty() ? "" : ",") + FormatDouble(v);
+  for (double v : {orig.info().sigma_position, orig.info().sigma_orientation, orig.info().sigma_joint_bias})
+    sigma += (sigma.empty() ? "" : ",") + FormatDouble(v);
+
+  ASSERT_EQ(Shell("/usr/bin/python3 " + tools + "/session_to_ros1.py " + (dir / "orig") + " " + (dir / "rec.bag")), 0);
+  ASSERT_EQ(Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " + (dir / "rec.mcap") + " zstd"), 0);
+  ASSERT_EQ(Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " + (dir / "rec.db3")), 0);
+  ASSERT_EQ(test::RunInhand("replay " + (dir / "orig") + " --no-video --out " + (dir / "replay_orig")).exit_code, 0);
+  const std::string estimates = ReadText(dir / "replay_orig/estimates.csv");
+  ASSERT_GT(estimates.size(), 1000u);
+
+  for (const std::string rec : {"rec.bag", "rec.mcap", "rec.db3"}) {
+    SCOPED_TRACE(rec);
+    const std::string out = dir / ("imported_" + rec);
+    const test::CommandResult r = test::RunInhand("import " + (dir / rec) + " --out " + out + " --hand " + orig.Resolve(orig.info().hand_urdf) +
+                                                  " --object " + orig.Resolve(orig.info().object) +
+                                                  " --time-origin 0 --effort-is external --object-pose /object_pose --initial-pose=" + pose +
+                                                  " --initial-sigma " + sigma);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    // Joints, camera poses and truth to the last digit; every image byte for byte.
+    for (const char* file : {"joints.csv", "camera.csv", "groundtruth.csv"})
+      EXPECT_EQ(ReadText(out + "/" + file), ReadText(dir / ("orig/" + std::string(file)))) << file;
+    const Session imported = Session::Load(out);
+    ASSERT_EQ(imported.camera_frames().size(), orig.camera_frames().size());
+    for (std::size_t i = 0; i < orig.camera_frames().size(); ++i)
+      ASSERT_EQ(ReadText(imported.Resolve(imported.camera_frames()[i].image)), ReadText(orig.Resolve(orig.camera_frames()[i].image))) << i;
+    EXPECT_EQ(imported.info().initial_T_PO.matrix(), T0.matrix());
+    EXPECT_EQ(imported.info().camera->fx, orig.info().camera->fx);
+    // And so the same estimates, for all four sets.
+    ASSERT_EQ(test::RunInhand("replay " + out + " --no-video --out " + out + "_replay").exit_code, 0);
+    EXPECT_EQ(ReadText(out + "_replay/estimates.csv"), estimates);
+  }
+}
+
+}  // namespace
+}  // namespace inhand
