@@ -58,7 +58,10 @@ int RunReplay(const ReplayCommand& cmd) {
   if (!cmd.params.empty()) params = ReadTrackerParams(cmd.params);
   SessionPlayer player(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
   const std::vector<ModalitySet>& sets = player.sets();
-  const bool want_pictures = (!cmd.no_video || cmd.frames) && session.info().camera.has_value();
+  const bool has_camera = session.info().camera.has_value();
+  // Without a camera the video is the external 3-D view at --video-fps.
+  const bool want_pictures = !cmd.no_video || cmd.frames;
+  if (!(cmd.video_fps > 0.0 && cmd.video_fps <= 240.0)) throw InputError("--video-fps: expected a rate in (0, 240] Hz");
   std::unique_ptr<FrameComposer> composer;
   if (want_pictures) composer = std::make_unique<FrameComposer>(player);
   for (const std::string& w : player.input_report().Warnings(session, player.models(), player.params()))
@@ -73,11 +76,24 @@ int RunReplay(const ReplayCommand& cmd) {
 
   std::unique_ptr<VideoWriter> video;
   const auto& frames = session.camera_frames();
-  const double fps = frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t) : 10.0;
+  const int n = session.num_samples();
+  const double fps = !has_camera ? cmd.video_fps : frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t) : 10.0;
+  double next_picture_t = n > 0 ? session.t(0) : 0.0;
+  int pictures = 0;
+  const auto emit = [&](const Image8& picture, int index) {
+    if (!cmd.no_video) {
+      if (!video) video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width, picture.height);
+      video->Write(picture);
+    }
+    if (cmd.frames) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "frames/frame_%06d.png", index);
+      WriteImage((out / name).string(), picture);
+    }
+  };
   std::vector<SetStats> stats(sets.size());
   const bool tty = ::isatty(STDERR_FILENO);
   const auto wall_start = std::chrono::steady_clock::now();
-  const int n = session.num_samples();
   for (int k = 0; k < n; ++k) {
     player.Step(k);
     for (std::size_t i = 0; i < sets.size(); ++i) {
@@ -110,19 +126,11 @@ int RunReplay(const ReplayCommand& cmd) {
       }
     }
     // The camera frame this sample processed, if any.
-    if (const int frame = player.last_frame(); frame >= 0) {
-      if (composer) {
-        const Image8 picture = composer->Compose(frame, session.t(k));
-        if (!cmd.no_video) {
-          if (!video) video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width, picture.height);
-          video->Write(picture);
-        }
-        if (cmd.frames) {
-          char name[64];
-          std::snprintf(name, sizeof(name), "frames/frame_%06d.png", frame);
-          WriteImage((out / name).string(), picture);
-        }
-      }
+    if (const int frame = player.last_frame(); frame >= 0 && composer && has_camera) emit(composer->Compose(frame, session.t(k)), frame);
+    // No camera: a picture of the 3-D view whenever the video's clock passes a sample.
+    if (composer && !has_camera && session.t(k) >= next_picture_t - 1e-9) {
+      emit(composer->ComposeExternal(session.t(k)), pictures++);
+      next_picture_t = session.t(0) + pictures / fps;
     }
     if (tty && (k % 100 == 0 || k == n - 1)) {
       const int width = 40, done = static_cast<int>(std::lround(width * double(k + 1) / n));

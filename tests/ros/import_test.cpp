@@ -227,5 +227,39 @@ TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
   EXPECT_FALSE(tree.Lookup("a", "b", 5000000000LL, true).has_value());  // 5 s beyond the last sample
 }
 
+// The real Allegro recording (../shared/fixtures): 16 joints named joint_0.0 ... joint_15.0, no
+// images, no torques. Every sample imports; replay runs j and renders the 3-D view of the real
+// finger motion into a video.
+TEST(Import, RealAllegroBagReplaysWithA3dVideo) {
+  const fs::path bag = fs::path(test::SourceDir()).parent_path() / "shared/fixtures/ros1/allegro_jointstates.bag";
+  if (!fs::exists(bag)) GTEST_SKIP() << bag << " is absent";
+  INHAND_REQUIRE_SHARED_ASSETS();
+  test::TempDir dir;
+  const std::string hands = test::SharedAssets() + "/hands/allegro_hand/allegro_hand_right.urdf";
+  const test::CommandResult r = test::RunInhand("import " + bag.string() + " --out " + (dir / "s") + " --hand " + hands + " --object " +
+                                                test::SharedAssets() + "/objects/ycb/large_marker.urdf --initial-pose=0.05,0,0.09,0.7071068,0.7071068,0,0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Session s = Session::Load(dir / "s");
+  EXPECT_EQ(s.num_samples(), 2697);
+  EXPECT_FALSE(s.has_torques());
+  EXPECT_FALSE(s.info().camera.has_value());
+  EXPECT_NEAR(s.t(s.num_samples() - 1), 8.091, 0.001);
+  ASSERT_EQ(s.joint_names().size(), 16u);
+  EXPECT_EQ(s.joint_names()[15], "joint_15.0");
+  // The fingers really move in this recording.
+  EXPECT_GT((s.q(s.num_samples() - 1) - s.q(0)).cwiseAbs().maxCoeff(), 0.2);
+
+  const test::CommandResult replay = test::RunInhand("replay " + (dir / "s") + " --out " + (dir / "r") + " --frames --video-fps 5");
+  ASSERT_EQ(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("  j: "), std::string::npos) << replay.output;
+  EXPECT_TRUE(fs::exists(dir / "r/replay.mp4"));
+  int frames = 0;
+  for (const auto& e : fs::directory_iterator(dir / "r/frames")) frames += e.path().extension() == ".png";
+  EXPECT_EQ(frames, 41);  // 8.09 s at 5 Hz, from t = 0
+  const Image8 first = ReadImage(dir / "r/frames/frame_000000.png");
+  EXPECT_EQ(first.width, 960);
+  EXPECT_EQ(test::RunInhand("compare " + (dir / "r/frames/frame_000000.png") + " " + (dir / "r/frames/frame_000040.png")).exit_code, 1);
+}
+
 }  // namespace
 }  // namespace inhand

@@ -58,6 +58,7 @@ struct ReplayCommand {
   std::string params;      // TrackerParams JSON, "" = defaults
   bool no_video = false;
   bool frames = false;     // also write each annotated frame as PNG
+  double video_fps = 30.0; // sessions without a camera: the 3-D view's frame rate
 };
 int RunReplay(const ReplayCommand& cmd);
 
