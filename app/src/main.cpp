@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
   replay_cmd->add_option("--params", replay.params, "tracker parameters (JSON, as written to params.json)");
   replay_cmd->add_flag("--no-video", replay.no_video, "skip replay.mp4");
   replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");
+  replay_cmd->add_flag("--mcap", replay.mcap, "also write replay.mcap for Foxglove/Lichtblick (poses, errors, image + overlays, contacts)");
   replay_cmd->add_option("--video-fps", replay.video_fps, "sessions without a camera: frame rate of the 3-D view video")->capture_default_str();
 
   inhand::app::TagsCommand tags;

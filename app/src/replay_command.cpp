@@ -16,6 +16,7 @@
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/video.hpp"
+#include "mcap_export.hpp"
 #include "staged_output.hpp"
 
 namespace fs = std::filesystem;
@@ -75,6 +76,8 @@ int RunReplay(const ReplayCommand& cmd) {
   csv << "\n";
 
   std::unique_ptr<VideoWriter> video;
+  std::unique_ptr<McapExport> mcap;
+  if (cmd.mcap) mcap = std::make_unique<McapExport>((out / "replay.mcap").string(), player);
   const auto& frames = session.camera_frames();
   const int n = session.num_samples();
   const double fps = !has_camera ? cmd.video_fps : frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t) : 10.0;
@@ -125,6 +128,7 @@ int RunReplay(const ReplayCommand& cmd) {
         st.last_with_truth = r;
       }
     }
+    if (mcap) mcap->AddSample(k);
     // The camera frame this sample processed, if any.
     if (const int frame = player.last_frame(); frame >= 0 && composer && has_camera) emit(composer->Compose(frame, session.t(k)), frame);
     // No camera: a picture of the 3-D view whenever the video's clock passes a sample.
@@ -140,6 +144,7 @@ int RunReplay(const ReplayCommand& cmd) {
   }
   if (tty) std::fprintf(stderr, "\n");
   if (video) video->Close();
+  if (mcap) mcap->Close();
   csv.close();
 
   Json summary = {{"session", fs::absolute(cmd.session).lexically_normal().string()},
@@ -147,6 +152,7 @@ int RunReplay(const ReplayCommand& cmd) {
                   {"samples", n},
                   {"camera_frames", frames.size()},
                   {"video", video ? "replay.mp4" : Json(nullptr)},
+                  {"mcap", mcap ? "replay.mcap" : Json(nullptr)},
                   {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
                   {"parameters", Json::parse(TrackerParamsToJson(player.params()))},
                   {"joint_samples_rejected", player.input_report().rejected_samples.size()},

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "inhand/sessions/session.hpp"
 #include "test_support.hpp"
 
@@ -93,6 +95,39 @@ TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
     ASSERT_EQ(test::RunInhand("replay " + out + " --no-video --out " + out + "_replay").exit_code, 0);
     EXPECT_EQ(ReadText(out + "_replay/estimates.csv"), estimates);
   }
+}
+
+// replay --mcap: the official MCAP reader (@mcap/core, CRCs checked) reads the export back, with
+// every topic, its foxglove schema, the expected message counts and the session's time span.
+TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
+  const std::string tools = test::SourceDir() + "/tests/ros";
+  if (!fs::is_directory(tools + "/node/node_modules/@mcap/core"))
+    GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "sim")).exit_code, 0);
+  const Session s = Session::Load(dir / "sim");
+  ASSERT_EQ(test::RunInhand("replay " + (dir / "sim") + " --no-video --mcap --modalities j,jta --out " + (dir / "r")).exit_code, 0);
+  const std::string json_path = dir / "check.json";
+  ASSERT_EQ(std::system(("node " + tools + "/check_mcap.mjs " + (dir / "r/replay.mcap") + " > " + json_path).c_str()), 0);
+  const nlohmann::json j = nlohmann::json::parse(ReadText(json_path));
+  const long n = s.num_samples(), frames = static_cast<long>(s.camera_frames().size());
+  const auto count = [&](const std::string& topic) { return j.at("topics").at(topic).at("count").get<long>(); };
+  EXPECT_EQ(count("/inhand/pose/j"), n);
+  EXPECT_EQ(count("/inhand/pose/jta"), n);
+  EXPECT_EQ(count("/inhand/errors"), n);
+  EXPECT_EQ(count("/tf"), 3 * n + frames);  // two sets and the truth per sample, the camera per frame
+  EXPECT_EQ(count("/camera/image"), frames);
+  EXPECT_EQ(count("/camera/annotations"), frames);
+  EXPECT_EQ(count("/inhand/contacts"), frames);
+  EXPECT_EQ(j.at("topics").at("/inhand/pose/j").at("schema"), "foxglove.PoseInFrame");
+  EXPECT_EQ(j.at("topics").at("/camera/image").at("schema"), "foxglove.CompressedImage");
+  EXPECT_EQ(j.at("topics").at("/inhand/contacts").at("schema"), "foxglove.SceneUpdate");
+  EXPECT_EQ(j.at("topics").at("/tf").at("message_encoding"), "json");
+  EXPECT_EQ(j.at("start_ns"), std::to_string(std::llround(s.t(0) * 1e9)));
+  EXPECT_EQ(j.at("end_ns"), std::to_string(std::llround(s.t(static_cast<int>(n) - 1) * 1e9)));
+  EXPECT_EQ(j.at("json_errors"), 0);
+  EXPECT_EQ(j.at("statistics").at("messages"), 6 * n + 4 * frames);
+  EXPECT_TRUE(j.at("footer").get<bool>());
 }
 
 }  // namespace

@@ -59,6 +59,7 @@ struct ReplayCommand {
   bool no_video = false;
   bool frames = false;     // also write each annotated frame as PNG
   double video_fps = 30.0; // sessions without a camera: the 3-D view's frame rate
+  bool mcap = false;       // also write replay.mcap (Foxglove, Lichtblick)
 };
 int RunReplay(const ReplayCommand& cmd);
 

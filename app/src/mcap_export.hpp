@@ -1,0 +1,35 @@
+#pragma once
+// replay --mcap: the replay as an MCAP file for Foxglove and Lichtblick. JSON messages with their
+// JSON schemas (no protobuf): each set's pose (foxglove.PoseInFrame on /inhand/pose/SET and a
+// foxglove.FrameTransform palm -> object_SET on /tf) and its errors and sigmas (plain JSON on
+// /inhand/errors) at joint rate; at each camera frame the image (foxglove.CompressedImage), its
+// Fig.-1 overlays as foxglove.ImageAnnotations, and the contacts and forces as a
+// foxglove.SceneUpdate.
+#include <memory>
+#include <string>
+
+#include "inhand/app/player.hpp"
+
+namespace inhand::ros {
+class McapWriter;
+}
+
+namespace inhand::app {
+
+class McapExport {
+ public:
+  McapExport(const std::string& path, const SessionPlayer& player);
+  ~McapExport();
+  // After player.Step(k).
+  void AddSample(int k);
+  void Close();
+
+ private:
+  void AddFrame(int frame, double t);
+  const SessionPlayer& p_;
+  std::unique_ptr<ros::McapWriter> w_;
+  std::vector<std::uint16_t> pose_channels_;
+  std::uint16_t tf_ = 0, errors_ = 0, image_ = 0, annotations_ = 0, scene_ = 0;
+};
+
+}  // namespace inhand::app
