@@ -10,7 +10,19 @@ PACKAGES=(
   libopencv-dev libapriltag-dev libosmesa6-dev libimgui-dev libglfw3-dev libegl-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
   ffmpeg xvfb xauth imagemagick
+  # ROS recordings (inhand import): ROS 1 bags through Debian's rosbag_storage and message
+  # headers; MCAP chunk codecs and rosbag2's sqlite3 for our own ROS 2 readers.
+  librosbag-storage-dev libsensor-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev libnav-msgs-dev
+  librcpputils-dev librcutils-dev libboost-filesystem-dev libboost-regex-dev
+  libzstd-dev liblz4-dev libsqlite3-dev
+  # The official writers the importer is tested against: Debian's rosbag (Python).
+  python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs
 )
+# Node.js for the official MCAP / ROS 2 tools (npm packages below): Debian's, unless a Node.js
+# with npm is installed already (its package conflicts with Debian's npm).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  PACKAGES+=(nodejs npm)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -19,8 +31,20 @@ for p in "${PACKAGES[@]}"; do
   fi
 done
 
+npm_tools() {
+  # @mcap/core, @foxglove/rosmsg2-serialization, ... pinned by tests/ros/node/package-lock.json.
+  local dir
+  dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/ros/node"
+  if [ -f "$dir/node_modules/.package-lock.json" ] && cmp -s "$dir/package-lock.json" "$dir/node_modules/.inhand-lock"; then
+    return 0
+  fi
+  echo "install-deps: npm ci in tests/ros/node"
+  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error) && cp "$dir/package-lock.json" "$dir/node_modules/.inhand-lock"
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#PACKAGES[@]} packages present"
+  npm_tools
   exit 0
 fi
 
@@ -30,3 +54,4 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -q
 $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+npm_tools
