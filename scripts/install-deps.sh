@@ -14,7 +14,7 @@ PACKAGES=(
   # headers; MCAP chunk codecs and rosbag2's sqlite3 for our own ROS 2 readers.
   librosbag-storage-dev libsensor-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev libnav-msgs-dev
   librcpputils-dev librcutils-dev libboost-filesystem-dev libboost-regex-dev
-  libzstd-dev liblz4-dev libsqlite3-dev
+  libzstd-dev liblz4-dev libsqlite3-dev libdeflate-dev
   # The official writers the importer is tested against: Debian's rosbag (Python).
   python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs
 )

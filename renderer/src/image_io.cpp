@@ -107,15 +107,4 @@ Image8 DecodeImage(const std::uint8_t* data, std::size_t size, const std::string
   return out;
 }
 
-std::vector<std::uint8_t> EncodePng(const Image8& image) {
-  INHAND_CHECK(image.channels == 1 || image.channels == 3, "EncodePng takes RGB or grey images");
-  const cv::Mat in(image.height, image.width, image.channels == 1 ? CV_8UC1 : CV_8UC3, const_cast<std::uint8_t*>(image.data.data()));
-  cv::Mat bgr;
-  if (image.channels == 3) cv::cvtColor(in, bgr, cv::COLOR_RGB2BGR);
-  else bgr = in;
-  std::vector<std::uint8_t> out;
-  cv::imencode(".png", bgr, out, {cv::IMWRITE_PNG_COMPRESSION, 1});
-  return out;
-}
-
 }  // namespace inhand

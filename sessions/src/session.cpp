@@ -430,13 +430,15 @@ void SessionWriter::AddCameraFrame(double t, const Image8& image, const Transfor
   camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
 }
 
-void SessionWriter::AddEncodedCameraFrame(double t, const std::vector<std::uint8_t>& bytes, const std::string& extension,
-                                          const Vec3& p_PC, const Quat& q_PC) {
+void SessionWriter::AdoptCameraFrame(double t, const std::string& file, const std::string& extension, const Vec3& p_PC,
+                                     const Quat& q_PC) {
   INHAND_CHECK(info_.camera.has_value(), "camera frames need camera intrinsics in SessionInfo");
-  INHAND_CHECK(extension == "png" || extension == "jpg", "encoded frames are png or jpg");
+  INHAND_CHECK(extension == "png" || extension == "jpg", "adopted frames are png or jpg");
   char name[64];
   std::snprintf(name, sizeof(name), "images/frame_%06d.%s", num_frames_++, extension.c_str());
-  WriteText(fs::path(tmp_) / name, std::string(bytes.begin(), bytes.end()));
+  std::error_code ec;
+  fs::rename(file, fs::path(tmp_) / name, ec);
+  if (ec) throw InputError(file + ": cannot move into " + tmp_ + " (" + ec.message() + ")");
   camera_csv_ += FormatDouble(t) + "," + name + PoseFields(p_PC, q_PC) + "\n";
 }
 

@@ -1,10 +1,14 @@
 #include "inhand/ros/import.hpp"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <cmath>
 #include <deque>
 #include <filesystem>
-#include <future>
+#include <fstream>
+#include <condition_variable>
+#include <mutex>
 #include <iomanip>
 #include <sstream>
 #include <thread>
@@ -129,19 +133,17 @@ Image8 ToRgb(const ImageMsg& m, const std::string& context) {
 struct Encoded {
   std::vector<std::uint8_t> bytes;
   std::string extension;
+  int width = 0, height = 0;
 };
 
 // The frame's file: raw images as PNG, PNG and JPEG messages as they are (after checking that
-// they decode to the camera's size).
-Encoded EncodeFrame(const Payload& payload, const Intrinsics& K, const std::string& context) {
-  const auto check = [&](int w, int h) {
-    if (w != K.width || h != K.height)
-      throw InputError(context + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ", camera_info says " +
-                       std::to_string(K.width) + "x" + std::to_string(K.height));
-  };
+// they decode).
+Encoded EncodeFrame(const Payload& payload, const std::string& context) {
   if (const auto* raw = std::get_if<ImageMsg>(&payload)) {
-    check(static_cast<int>(raw->width), static_cast<int>(raw->height));
-    return {EncodePng(ToRgb(*raw, context)), "png"};
+    const int w = static_cast<int>(raw->width), h = static_cast<int>(raw->height);
+    if (raw->encoding == "rgb8" && w > 0 && h > 0 && raw->step >= raw->width * 3 && raw->data.size() >= std::size_t{raw->step} * raw->height)
+      return {EncodePng(raw->data.data(), w, h, 3, raw->step), "png", w, h};  // straight from the message
+    return {EncodePng(ToRgb(*raw, context)), "png", w, h};
   }
   const auto& c = std::get<CompressedImageMsg>(payload);
   std::string f = c.format;
@@ -149,10 +151,9 @@ Encoded EncodeFrame(const Payload& payload, const Intrinsics& K, const std::stri
   const bool png = f.find("png") != std::string::npos, jpeg = f.find("jpeg") != std::string::npos || f.find("jpg") != std::string::npos;
   if (!png && !jpeg) throw InputError(context + ": compressed image format '" + c.format + "' is not supported (expected jpeg or png)");
   const Image8 img = DecodeImage(c.data.data(), c.data.size(), context);
-  check(img.width, img.height);
   // The bytes' own signature decides the extension (a "jpeg" message holding a PNG happens).
   const bool is_png = c.data.size() > 4 && c.data[0] == 0x89 && c.data[1] == 'P';
-  return {c.data, is_png ? "png" : "jpg"};
+  return {c.data, is_png ? "png" : "jpg", img.width, img.height};
 }
 
 struct JointSample {
@@ -165,6 +166,99 @@ struct FrameRef {
   std::int64_t stamp = 0;
   std::uint64_t message = 0;  // index among the image topic's messages
   Pose T_PC;
+};
+
+// An encoded frame waiting in the staging folder for its place in the session.
+struct StagedFrame {
+  std::string file, extension;
+  int width = 0, height = 0;
+};
+
+// Workers that encode frames while the main thread reads the recording: a fixed pool (each
+// keeps its encoder's scratch buffers warm), a bounded queue (the main thread waits when it is
+// full), the first error rethrown by Drain().
+class EncoderPool {
+ public:
+  using Job = std::function<void()>;
+  explicit EncoderPool(unsigned threads) : capacity_(2 * threads) {
+    for (unsigned i = 0; i < threads; ++i) workers_.emplace_back([this] { Work(); });
+  }
+  ~EncoderPool() {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      stop_ = true;
+    }
+    ready_.notify_all();
+    for (auto& w : workers_) w.join();
+  }
+  EncoderPool(const EncoderPool&) = delete;
+  EncoderPool& operator=(const EncoderPool&) = delete;
+  void Submit(Job job) {
+    std::unique_lock<std::mutex> lock(m_);
+    space_.wait(lock, [&] { return jobs_.size() < capacity_ || error_; });
+    if (error_) std::rethrow_exception(error_);
+    jobs_.push_back(std::move(job));
+    ready_.notify_one();
+  }
+  void Drain() {
+    std::unique_lock<std::mutex> lock(m_);
+    space_.wait(lock, [&] { return (jobs_.empty() && busy_ == 0) || error_; });
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void Work() {
+    std::unique_lock<std::mutex> lock(m_);
+    while (true) {
+      ready_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
+      if (jobs_.empty()) return;  // stopping
+      Job job = std::move(jobs_.front());
+      jobs_.pop_front();
+      ++busy_;
+      space_.notify_all();
+      lock.unlock();
+      std::exception_ptr e;
+      try {
+        job();
+      } catch (...) {
+        e = std::current_exception();
+      }
+      lock.lock();
+      --busy_;
+      if (e && !error_) error_ = e;
+      space_.notify_all();
+    }
+  }
+  std::size_t capacity_;
+  std::mutex m_;
+  std::condition_variable ready_, space_;
+  std::deque<Job> jobs_;
+  int busy_ = 0;
+  bool stop_ = false;
+  std::exception_ptr error_;
+  std::vector<std::thread> workers_;
+};
+
+// A folder beside the output for frames encoded while the recording is read; removed at the end.
+class FrameStaging {
+ public:
+  explicit FrameStaging(const std::string& out) : dir_(PrepareStaging(fs::absolute(out).lexically_normal().string() + "-frames")) {
+    std::error_code ec;
+    fs::create_directories(dir_, ec);
+    if (ec) throw InputError(dir_.string() + ": cannot create (" + ec.message() + ")");
+  }
+  ~FrameStaging() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  FrameStaging(const FrameStaging&) = delete;
+  FrameStaging& operator=(const FrameStaging&) = delete;
+  std::string File(std::uint64_t message, const std::string& extension) const {
+    return (dir_ / ("message_" + std::to_string(message) + "." + extension)).string();
+  }
+
+ private:
+  fs::path dir_;
 };
 
 std::string Seconds(double s) {
@@ -243,6 +337,11 @@ std::string ListRecording(const std::string& path) {
 }
 
 ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(double)>& progress) {
+  // Frames of about a megabyte are allocated and freed hundreds of times, across threads: glibc
+  // would map and unmap each, and the page faults cost more than the PNG encoding. Keep them in
+  // the heap (process-wide; it only delays returning memory to the kernel).
+  mallopt(M_MMAP_THRESHOLD, 256 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
   ImportReport report;
   // Inputs first, before reading anything big.
   if (opt.out.empty()) throw InputError("import: --out is required");
@@ -293,15 +392,18 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   std::vector<std::string> column_names;
   std::vector<std::pair<std::int64_t, std::uint64_t>> image_stamps;  // stamp, message index
   std::string image_frame;
+  // Images are encoded on every core while the recording is read (one pass over it), into a
+  // staging folder; which of them the session keeps is decided once TF is known.
+  std::optional<FrameStaging> staging;
+  std::optional<EncoderPool> encoders;
+  if (!report.image_topic.empty()) staging.emplace(opt.out), encoders.emplace(std::max(1u, std::thread::hardware_concurrency()));
+  std::deque<StagedFrame> staged;  // by message index; elements stay put while it grows
   std::optional<Intrinsics> K;
   std::string K_context;
   std::vector<StampedTransform> truth;
   TfTree tree;
   const bool has_images = !report.image_topic.empty();
-  const auto pass_progress = [&](double base, double weight) {
-    return progress ? std::function<void(double)>([&, base, weight](double f) { progress(base + weight * f); }) : std::function<void(double)>();
-  };
-  rec->Read(read, false, [&](Message& m) {
+  rec->Read(read, true, [&](Message& m) {
     const std::string& topic = *m.topic;
     if (topic == report.joints_topic) {
       const auto& js = std::get<JointStateMsg>(m.payload);
@@ -343,7 +445,21 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
     } else if (topic == report.image_topic) {
       const Header& h = std::holds_alternative<ImageMsg>(m.payload) ? std::get<ImageMsg>(m.payload).header : std::get<CompressedImageMsg>(m.payload).header;
       if (image_frame.empty()) image_frame = h.frame_id;
-      image_stamps.emplace_back(StampOf(h, m.log_ns), report.image_messages++);
+      const std::uint64_t index = report.image_messages++;
+      image_stamps.emplace_back(StampOf(h, m.log_ns), index);
+      StagedFrame* slot = &staged.emplace_back();
+      auto payload = std::make_shared<Payload>(std::move(m.payload));
+      const std::string context = path + ": " + topic + " message " + std::to_string(index);
+      encoders->Submit([payload, context, index, slot, &staging]() mutable {
+        Encoded e = EncodeFrame(*payload, context);
+        payload.reset();  // the pixels go as soon as they are encoded
+        const std::string file = staging->File(index, e.extension);
+        std::ofstream out(file, std::ios::binary);
+        out.write(reinterpret_cast<const char*>(e.bytes.data()), static_cast<std::streamsize>(e.bytes.size()));
+        out.close();
+        if (!out) throw InputError(file + ": cannot write");
+        *slot = StagedFrame{file, e.extension, e.width, e.height};
+      });
     } else if (topic == report.camera_info_topic) {
       if (!K) {
         K_context = path + ": " + topic + " message 0";
@@ -361,7 +477,8 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
       const bool is_static = topic.find("static") != std::string::npos;
       for (const StampedTransform& t : std::get<TfMsg>(m.payload).transforms) tree.Add(t, is_static);
     }
-  }, pass_progress(0.0, has_images ? 0.3 : 1.0));
+  }, progress);
+  if (encoders) encoders->Drain();
   tree.Finish();
 
   // Joint samples in stamp order (stable: equal stamps keep file order), duplicates dropped.
@@ -416,6 +533,10 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
         ++report.frame_duplicates;
         continue;
       }
+      const StagedFrame& f = staged[index];
+      if (f.width != K->width || f.height != K->height)
+        throw InputError(path + ": " + report.image_topic + " message " + std::to_string(index) + ": image is " + std::to_string(f.width) + "x" +
+                         std::to_string(f.height) + ", camera_info says " + std::to_string(K->width) + "x" + std::to_string(K->height));
       const auto T = tree.Lookup(report.palm_frame, report.camera_frame, stamp, true, ns_of(opt.max_tf_gap_s));
       if (!T) {
         ++report.frames_without_tf;
@@ -485,43 +606,12 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
                           Eigen::Map<const Eigen::VectorXd>(s.tau.data(), static_cast<long>(s.tau.size())));
   for (const auto& [stamp, T] : gt) writer.AddGroundTruth(t_of(stamp), T.p, T.q);
 
-  // Pass 2: the images, encoded on every core, written in stamp order.
-  if (!frames.empty()) {
-    std::vector<int> slot_of(report.image_messages, -1);
-    for (std::size_t i = 0; i < frames.size(); ++i) slot_of[frames[i].message] = static_cast<int>(i);
-    std::map<int, std::future<Encoded>> pending;
-    std::size_t next = 0;
-    const std::size_t max_pending = 2 * std::max(1u, std::thread::hardware_concurrency());
-    const auto write_ready = [&](bool wait_for_one) {
-      while (true) {
-        auto it = pending.find(static_cast<int>(next));
-        if (it == pending.end()) return;
-        if (!wait_for_one && it->second.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
-        const Encoded e = it->second.get();
-        pending.erase(it);
-        writer.AddEncodedCameraFrame(t_of(frames[next].stamp), e.bytes, e.extension, frames[next].T_PC.p, frames[next].T_PC.q);
-        ++next;
-        wait_for_one = false;
-      }
-    };
-    std::uint64_t index = 0;
-    rec->Read({report.image_topic}, true, [&](Message& m) {
-      const int slot = index < slot_of.size() ? slot_of[index] : -1;
-      const std::string context = path + ": " + report.image_topic + " message " + std::to_string(index);
-      ++index;
-      if (slot < 0) return;
-      auto payload = std::make_shared<Payload>(std::move(m.payload));
-      pending[slot] = std::async(std::launch::async, [payload, context, Kc = *K] { return EncodeFrame(*payload, Kc, context); });
-      write_ready(false);
-      // Bounded, unless the recording's frames are out of stamp order (then they wait here).
-      while (pending.size() >= max_pending && pending.count(static_cast<int>(next))) write_ready(true);
-    }, pass_progress(0.3, 0.7));
-    while (next < frames.size()) {
-      if (!pending.count(static_cast<int>(next))) throw InputError(path + ": " + report.image_topic + " changed between two reads");
-      write_ready(true);
-    }
-    report.frames = frames.size();
+  // The frames kept, in stamp order, moved from the staging folder.
+  for (const FrameRef& f : frames) {
+    const StagedFrame& sf = staged[f.message];
+    writer.AdoptCameraFrame(t_of(f.stamp), sf.file, sf.extension, f.T_PC.p, f.T_PC.q);
   }
+  report.frames = frames.size();
   writer.Commit();
   return report;
 }

@@ -110,12 +110,11 @@ class SessionWriter {
                       const Eigen::Ref<const Eigen::VectorXd>& tau);
   // Writes images/frame_NNNNNN.png at once.
   void AddCameraFrame(double t, const Image8& image, const Transform& T_PC);
-  // Writes images/frame_NNNNNN.EXT (png or jpg) with bytes already encoded (an importer keeps a
-  // recording's compressed images as they are); the caller has checked they decode to an image
-  // of the intrinsics' size.
-  // The pose as translation + quaternion, written digit for digit (an importer passes them on).
-  void AddEncodedCameraFrame(double t, const std::vector<std::uint8_t>& bytes, const std::string& extension, const Vec3& p_PC,
-                             const Quat& q_PC);
+  // Moves an image file already written (png or jpg, on the same file system: an importer
+  // encodes frames while it reads) to images/frame_NNNNNN.EXT; the caller has checked that it
+  // decodes to an image of the intrinsics' size. The pose as translation + quaternion, written
+  // digit for digit (an importer passes recorded poses on).
+  void AdoptCameraFrame(double t, const std::string& file, const std::string& extension, const Vec3& p_PC, const Quat& q_PC);
   void AddGroundTruth(double t, const Transform& T_PO);
   void AddGroundTruth(double t, const Vec3& p_PO, const Quat& q_PO);
   // Any extra file (e.g. the simulator's true biases), relative to the session directory.

@@ -50,7 +50,8 @@ struct ImportReport {
 };
 
 // Throws InputError (naming the file, topic, message or frame) on every bad input; nothing is
-// left at `out` then. `progress` gets the fraction done.
+// left at `out` then. `progress` gets the fraction done. Raises glibc's mmap and trim thresholds
+// for the process (frame buffers are reused instead of mapped afresh).
 ImportReport ImportRecording(const ImportOptions& options, const std::function<void(double)>& progress = {});
 
 // `--list`: every topic with type, count, rate and span, and the TF frames with their parents.
