@@ -51,11 +51,11 @@ std::string RunDir(const std::string& out, const std::string& scenario, int seed
 }
 
 std::string RunCommand(const std::string& self, const std::string& out, const std::string& scenario, int seed,
-                       const std::string& noise, bool keep) {
+                       const std::string& noise, const std::string& modalities, bool keep) {
   const std::string dir = RunDir(out, scenario, seed);
   std::string c = Quote(self) + " simulate " + scenario + " --seed " + std::to_string(seed) + " --noise " + noise +
                   " --overwrite --out " + Quote(dir + "/session") + " > " + Quote(dir + "/log.txt") + " 2>&1 && " +
-                  Quote(self) + " replay " + Quote(dir + "/session") + " --no-video --out " + Quote(dir + "/replay") +
+                  Quote(self) + " replay " + Quote(dir + "/session") + " --modalities " + Quote(modalities) + " --no-video --out " + Quote(dir + "/replay") +
                   " >> " + Quote(dir + "/log.txt") + " 2>&1";
   if (!keep) c += " && rm -rf " + Quote(dir + "/session/images");
   return "mkdir -p " + Quote(dir) + " && " + c;
@@ -136,7 +136,11 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
     const auto to_px = [&](double t, double v) {
       return cv::Point(box.x + static_cast<int>((t - t0) / (t1 - t0) * box.width), box.y + box.height - static_cast<int>((v - lo) / (hi - lo) * box.height));
     };
-    for (const std::string set : {"j", "jt", "jta", "jtf", "truth"}) {
+    std::vector<std::string> order;  // every set, then the truth on top
+    for (const auto& entry : series)
+      if (entry.first != "truth") order.push_back(entry.first);
+    order.push_back("truth");
+    for (const std::string& set : order) {
       auto it = series.find(set);
       if (it == series.end()) continue;
       const Rgb c = ModalityColour(set);
@@ -194,6 +198,7 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       if (std::find(known.begin(), known.end(), s) == known.end()) throw InputError("--scenarios: unknown scenario '" + s + "'");
       else scenarios.push_back(s);
   }
+  ParseModalities(cmd.modalities);  // an unknown set is an error before anything is written
   // The evaluation folder collects runs (kept across --plan and --merge): it must be new, empty
   // or an evaluation folder already.
   const fs::path out_dir = CheckOutputFolder(cmd.out);
@@ -201,7 +206,7 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
   std::ofstream(out_dir / kOutputMarker) << "written by inhand evaluate\n";
   std::vector<std::pair<std::string, std::pair<std::string, int>>> runs;  // command, (scenario, seed)
   for (const std::string& s : scenarios)
-    for (int seed = 1; seed <= cmd.seeds; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, cmd.keep_sessions), {s, seed}});
+    for (int seed = 1; seed <= cmd.seeds; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, cmd.modalities, cmd.keep_sessions), {s, seed}});
   if (cmd.plan) {
     std::ofstream plan(fs::path(cmd.out) / "plan.txt");
     for (const auto& r : runs) plan << r.first << "\n";
@@ -254,7 +259,8 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       }
     }
     std::map<std::string, std::pair<Stat, Stat>> bars;
-    for (const std::string set : {"j", "jt", "jta", "jtf"}) {
+    for (const ModalitySet& m : ParseModalities(cmd.modalities)) {
+      const std::string& set = m.name;
       if (!pos.count(set)) continue;
       const Stat p = Stats(pos[set]), o = Stats(ori[set]), n = Stats(nees[set]);
       bars[set] = {p, o};

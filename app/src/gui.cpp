@@ -159,6 +159,7 @@ struct GuiState {
   FrameComposer::Orbit orbit;
   OverlayLayers layers;
   TrackerParams params;
+  std::vector<ModalitySet> sets;  // empty: the session's default sets
   char params_path[512] = "params.json";
   std::deque<Action> actions;
   std::string status;
@@ -171,7 +172,7 @@ class Runner {
  public:
   Runner(Session& session, GuiState& state) : session_(session), state_(state) { Restart(); }
   void Restart() {
-    player_ = std::make_unique<SessionPlayer>(session_, state_.params);
+    player_ = std::make_unique<SessionPlayer>(session_, state_.params, state_.sets);
     composer_ = std::make_unique<FrameComposer>(*player_);
     next_ = 0;
     last_frame_ = -1;
@@ -547,6 +548,7 @@ int RunGui(const GuiCommand& cmd) {
   Session session = Session::Load(cmd.session);
   GuiState state;
   if (!cmd.params.empty()) state.params = ReadTrackerParams(cmd.params);
+  if (!cmd.modalities.empty()) state.sets = ParseModalities(cmd.modalities);
   if (cmd.time >= 0.0) {
     int k = 0;
     while (k + 1 < session.num_samples() && session.t(k + 1) <= cmd.time) ++k;

@@ -92,6 +92,7 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("--seeds", evaluate.seeds, "seeds per scenario")->capture_default_str();
   evaluate_cmd->add_option("--noise", evaluate.noise, "noise profile: paper or hard")->capture_default_str();
   evaluate_cmd->add_option("--jobs", evaluate.jobs, "runs in parallel")->capture_default_str();
+  evaluate_cmd->add_option("--modalities", evaluate.modalities, "comma-separated sets, as for replay")->capture_default_str();
   evaluate_cmd->add_flag("--plan", evaluate.plan, "write plan.txt (one command per run) and stop");
   evaluate_cmd->add_flag("--merge", evaluate.merge, "only build tables and plots from existing runs");
   evaluate_cmd->add_flag("--keep-sessions", evaluate.keep_sessions, "keep the simulated images");
@@ -100,6 +101,7 @@ int main(int argc, char** argv) {
   auto* gui_cmd = cli.add_subcommand("gui", "Interactive session (Dear ImGui) when a display exists; --screenshot renders offscreen");
   gui_cmd->add_option("SESSION", gui.session, "session directory")->required();
   gui_cmd->add_option("--params", gui.params, "tracker parameters (JSON, as written to params.json)");
+  gui_cmd->add_option("--modalities", gui.modalities, "comma-separated sets, as for replay (default: every set the session supports)");
   gui_cmd->add_option("--frames", gui.frames, "quit after N frames");
   gui_cmd->add_option("--screenshot", gui.screenshot, "save the last frame as PNG");
   gui_cmd->add_option("--time", gui.time, "start at this session time [s]");

@@ -86,6 +86,7 @@ struct EvaluateCommand {
   int seeds = 5;
   std::string noise = "paper";
   int jobs = 2;            // runs in parallel (processes)
+  std::string modalities = "j,jt,jta,jtf";  // the sets each run replays (j plus any of t, a, f)
   bool plan = false;       // write plan.txt (one command line per run) and stop
   bool merge = false;      // only build the tables and plots from existing runs
   bool keep_sessions = false;

@@ -10,6 +10,7 @@ namespace inhand::app {
 struct GuiCommand {
   std::string session;
   std::string params;      // TrackerParams JSON
+  std::string modalities;  // "" = every set the session supports
   int frames = -1;         // quit after this many frames (-1: run until closed)
   std::string screenshot;  // save the last frame as PNG
   double time = -1.0;      // start at this session time [s] (-1: the beginning)
