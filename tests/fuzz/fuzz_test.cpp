@@ -1,5 +1,6 @@
 // A deterministic mutation fuzzer for every parser of user input: session.json, joints.csv,
-// camera.csv, groundtruth.csv, the parameter file, object.json and URDF. Each starts from a
+// camera.csv, groundtruth.csv, the parameter file, object.json, URDF and ROS 2 recordings (MCAP,
+// CDR, .db3). Each starts from a
 // valid file and mutates it (bytes: flips, insertions, deletions, duplications, truncation;
 // tokens: numbers replaced by extremes, strings emptied, values nested deeply, lines swapped,
 // duplicated or dropped). Every input must either load, and then hold only finite, valid
@@ -20,6 +21,7 @@
 #include "inhand/core/error.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
+#include "inhand/ros/recording.hpp"
 #include "inhand/sessions/session.hpp"
 #include "inhand/tracker/tracker_params.hpp"
 #include "test_support.hpp"
@@ -123,6 +125,11 @@ Tally Fuzz(const std::string& name, const std::string& valid, const std::functio
   EXPECT_EQ(parse(valid), "") << name << ": the valid seed must load";
   for (int run = 0; run < Runs(); ++run) {
     const std::string input = Mutator(static_cast<unsigned>(run) * 2654435761u + 1u)(valid);
+    // INHAND_FUZZ_DUMP=NAME:RUN runs only that input and writes it to $TMPDIR/inhand-fuzz-NAME-RUN.
+    if (const char* dump = std::getenv("INHAND_FUZZ_DUMP")) {
+      if (std::string(dump) != name + ":" + std::to_string(run)) continue;
+      std::ofstream(fs::temp_directory_path() / ("inhand-fuzz-" + name + "-" + std::to_string(run)), std::ios::binary) << input;
+    }
     const auto start = std::chrono::steady_clock::now();
     try {
       const std::string wrong = parse(input);
@@ -247,6 +254,29 @@ TEST(Fuzz, Urdf) {
     return std::string();
   });
 }
+
+// ROS recordings: our MCAP reader (plain and zstd chunks), CDR decoder and .db3 reader, on
+// mutations of the fixtures the official tools wrote. Every topic is read and decoded.
+void FuzzRecording(const std::string& fixture) {
+  const std::string valid = Read(test::SourceDir() + "/tests/ros/fixtures/" + fixture);
+  test::TempDir work;
+  const std::string path = work / ("r" + fs::path(fixture).extension().string());
+  Fuzz(fixture, valid, [&](const std::string& bytes) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+    std::unique_ptr<ros::Recording> rec = ros::OpenRecording(path);
+    std::vector<std::string> topics;
+    for (const ros::TopicInfo& t : rec->Topics()) topics.push_back(t.name);
+    std::size_t messages = 0;
+    rec->Read(topics, true, [&](ros::Message&) { ++messages; });
+    return std::string();
+  });
+}
+
+TEST(Fuzz, McapRecording) { FuzzRecording("synthetic.mcap"); }
+TEST(Fuzz, McapZstdRecording) { FuzzRecording("synthetic_zstd.mcap"); }
+TEST(Fuzz, McapLz4Recording) { FuzzRecording("synthetic_lz4.mcap"); }
+TEST(Fuzz, Db3Recording) { FuzzRecording("synthetic.db3"); }
+TEST(Fuzz, Ros1Bag) { FuzzRecording("synthetic.bag"); }
 
 }  // namespace
 }  // namespace inhand

@@ -8,9 +8,19 @@ namespace inhand::ros {
 
 namespace {
 
+// One reader for both serialisations: CDR (an encapsulation header, primitives aligned to their
+// size, strings with a terminating NUL, Time as int32 sec + uint32 nanosec) and ROS 1's (no
+// header, no alignment, little endian, strings without NUL, Header with a seq first, Time as
+// uint32 sec + uint32 nsec). Every length is checked against the bytes left before anything is
+// allocated.
 class CdrReader {
  public:
-  CdrReader(const std::uint8_t* data, std::size_t size, const std::string& context) : context_(context) {
+  CdrReader(const std::uint8_t* data, std::size_t size, const std::string& context, bool ros1) : ros1_(ros1), context_(context) {
+    if (ros1) {
+      p_ = data;
+      n_ = size;
+      return;
+    }
     if (size < 4) Fail("shorter than the 4-byte CDR encapsulation header");
     // Encapsulation kinds: 0x0000 CDR big endian, 0x0001 CDR little endian (ROS 2's XCDR1).
     if (data[0] != 0 || data[1] > 1) Fail("unsupported CDR encapsulation " + std::to_string(data[0]) + "," + std::to_string(data[1]) + " (expected CDR_LE or CDR_BE)");
@@ -36,10 +46,10 @@ class CdrReader {
   std::uint32_t U32() { return Prim<std::uint32_t>(); }
 
   std::string String() {
-    const std::uint32_t len = U32();  // including the terminating NUL
+    const std::uint32_t len = U32();  // CDR: including the terminating NUL
     Need(len);
     std::string s;
-    if (len > 0) s.assign(reinterpret_cast<const char*>(p_ + pos_), len - (p_[pos_ + len - 1] == 0 ? 1 : 0));
+    if (len > 0) s.assign(reinterpret_cast<const char*>(p_ + pos_), len - (!ros1_ && p_[pos_ + len - 1] == 0 ? 1 : 0));
     pos_ += len;
     return s;
   }
@@ -61,9 +71,11 @@ class CdrReader {
   }
   Header ReadHeader() {
     Header h;
-    const std::int32_t sec = Prim<std::int32_t>();
+    if (ros1_) U32();  // seq
+    const std::int64_t sec = ros1_ ? std::int64_t{U32()} : std::int64_t{Prim<std::int32_t>()};
     const std::uint32_t nsec = U32();
-    h.stamp_ns = static_cast<std::int64_t>(sec) * 1000000000LL + nsec;
+    if (nsec >= 1000000000u) Fail("header stamp has " + std::to_string(nsec) + " nanoseconds (expected < 1e9)");
+    h.stamp_ns = sec * 1000000000LL + nsec;
     h.frame_id = String();
     return h;
   }
@@ -82,20 +94,23 @@ class CdrReader {
   [[noreturn]] void Fail(const std::string& what) const { throw InputError(context_ + ": " + what); }
 
  private:
-  void Align(std::size_t a) { pos_ = (pos_ + a - 1) / a * a; }
+  void Align(std::size_t a) {
+    if (!ros1_) pos_ = (pos_ + a - 1) / a * a;
+  }
   void Need(std::size_t k) const {
-    if (pos_ > n_ || k > n_ - pos_) Fail("truncated CDR data (" + std::to_string(n_ + 4) + " bytes)");
+    if (pos_ > n_ || k > n_ - pos_) Fail(std::string("truncated ") + (ros1_ ? "message" : "CDR data") + " (" + std::to_string(n_) + " bytes)");
   }
   const std::uint8_t* p_ = nullptr;
   std::size_t n_ = 0, pos_ = 0;
   bool little_ = true;
+  bool ros1_ = false;
   const std::string& context_;
 };
 
 }  // namespace
 
-Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context) {
-  CdrReader r(data, size, context);
+Payload Decode(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context, bool ros1) {
+  CdrReader r(data, size, context, ros1);
   switch (type) {
     case MsgType::kJointState: {
       JointStateMsg m;
@@ -173,6 +188,14 @@ Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool
       break;
   }
   return std::monostate();
+}
+
+Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context) {
+  return Decode(type, data, size, decode_images, context, false);
+}
+
+Payload DecodeRos1(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context) {
+  return Decode(type, data, size, decode_images, context, true);
 }
 
 }  // namespace inhand::ros

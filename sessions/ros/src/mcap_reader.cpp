@@ -149,7 +149,9 @@ class McapRecording final : public Recording {
     if (compression.empty()) {
       if (uncompressed != size) throw InputError(context + ": uncompressed size " + std::to_string(uncompressed) + " differs from the records' " + std::to_string(size));
     } else {
-      if (uncompressed > (std::uint64_t{1} << 36)) throw InputError(context + ": implausible uncompressed size " + std::to_string(uncompressed));
+      // Recorders write chunks of a few megabytes; a gigabyte is a corrupt size field.
+      if (uncompressed > (std::uint64_t{1} << 30))
+        throw InputError(context + ": implausible uncompressed size " + std::to_string(uncompressed) + " (corrupt MCAP?)");
       buffer_.resize(uncompressed);
       if (compression == "zstd") {
         const std::size_t got = ZSTD_decompress(buffer_.data(), uncompressed, records, size);

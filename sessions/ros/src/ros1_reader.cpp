@@ -1,4 +1,5 @@
-// ROS 1 bags through Debian's rosbag_storage and the roscpp message types.
+// ROS 1 bags through Debian's rosbag_storage (the container); message bodies by cdr.hpp's
+// bounds-checked reader, checked against the standard definitions' MD5 from Debian's headers.
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
@@ -12,6 +13,7 @@
 
 #include <map>
 
+#include "cdr.hpp"
 #include "inhand/core/error.hpp"
 #include "recordings.hpp"
 
@@ -19,77 +21,34 @@ namespace inhand::ros {
 
 namespace {
 
-Header Convert(const std_msgs::Header& h) { return {static_cast<std::int64_t>(h.stamp.toNSec()), h.frame_id}; }
-
-Pose Convert(const geometry_msgs::Vector3& t, const geometry_msgs::Quaternion& q, const std::string& context) {
-  return {Vec3(t.x, t.y, t.z), MessageQuaternion(q.w, q.x, q.y, q.z, context)};
-}
-Pose Convert(const geometry_msgs::Point& t, const geometry_msgs::Quaternion& q, const std::string& context) {
-  return {Vec3(t.x, t.y, t.z), MessageQuaternion(q.w, q.x, q.y, q.z, context)};
-}
-
-StampedTransform Convert(const geometry_msgs::TransformStamped& m, const std::string& context) {
-  return {Convert(m.header), m.child_frame_id, Convert(m.transform.translation, m.transform.rotation, context)};
-}
-
-template <class T>
-boost::shared_ptr<T> Instantiate(const rosbag::MessageInstance& mi, const std::string& context) {
-  boost::shared_ptr<T> m = mi.instantiate<T>();
-  if (!m) throw InputError(context + ": cannot be read as " + mi.getDataType() + " (its definition differs from sensor_msgs' / geometry_msgs')");
-  return m;
-}
-
-Payload Decode(const rosbag::MessageInstance& mi, MsgType type, bool decode_images, const std::string& context) {
+// The MD5 of the standard definition of each decoded type (Debian's message headers): a bag whose
+// connection declares the same type name with another definition is refused, not misread.
+const char* StandardMd5(MsgType type) {
   switch (type) {
-    case MsgType::kJointState: {
-      auto m = Instantiate<sensor_msgs::JointState>(mi, context);
-      return JointStateMsg{Convert(m->header), m->name, m->position, m->velocity, m->effort};
-    }
-    case MsgType::kImage: {
-      auto m = Instantiate<sensor_msgs::Image>(mi, context);
-      ImageMsg out{Convert(m->header), m->height, m->width, m->encoding, m->is_bigendian, m->step, {}};
-      if (decode_images) out.data = std::move(m->data);
-      return out;
-    }
-    case MsgType::kCompressedImage: {
-      auto m = Instantiate<sensor_msgs::CompressedImage>(mi, context);
-      CompressedImageMsg out{Convert(m->header), m->format, {}};
-      if (decode_images) out.data = std::move(m->data);
-      return out;
-    }
-    case MsgType::kCameraInfo: {
-      auto m = Instantiate<sensor_msgs::CameraInfo>(mi, context);
-      CameraInfoMsg out;
-      out.header = Convert(m->header);
-      out.height = m->height;
-      out.width = m->width;
-      out.distortion_model = m->distortion_model;
-      out.d = m->D;
-      std::copy(m->K.begin(), m->K.end(), out.k.begin());
-      std::copy(m->R.begin(), m->R.end(), out.r.begin());
-      std::copy(m->P.begin(), m->P.end(), out.p.begin());
-      return out;
-    }
-    case MsgType::kTf: {
-      auto m = Instantiate<tf2_msgs::TFMessage>(mi, context);
-      TfMsg out;
-      for (const auto& t : m->transforms) out.transforms.push_back(Convert(t, context));
-      return out;
-    }
-    case MsgType::kTransformStamped:
-      return Convert(*Instantiate<geometry_msgs::TransformStamped>(mi, context), context);
-    case MsgType::kPoseStamped: {
-      auto m = Instantiate<geometry_msgs::PoseStamped>(mi, context);
-      return StampedTransform{Convert(m->header), "", Convert(m->pose.position, m->pose.orientation, context)};
-    }
-    case MsgType::kOdometry: {
-      auto m = Instantiate<nav_msgs::Odometry>(mi, context);
-      return StampedTransform{Convert(m->header), m->child_frame_id, Convert(m->pose.pose.position, m->pose.pose.orientation, context)};
-    }
-    case MsgType::kOther:
-      break;
+    case MsgType::kJointState: return ::ros::message_traits::MD5Sum<sensor_msgs::JointState>::value();
+    case MsgType::kImage: return ::ros::message_traits::MD5Sum<sensor_msgs::Image>::value();
+    case MsgType::kCompressedImage: return ::ros::message_traits::MD5Sum<sensor_msgs::CompressedImage>::value();
+    case MsgType::kCameraInfo: return ::ros::message_traits::MD5Sum<sensor_msgs::CameraInfo>::value();
+    case MsgType::kTf: return ::ros::message_traits::MD5Sum<tf2_msgs::TFMessage>::value();
+    case MsgType::kPoseStamped: return ::ros::message_traits::MD5Sum<geometry_msgs::PoseStamped>::value();
+    case MsgType::kTransformStamped: return ::ros::message_traits::MD5Sum<geometry_msgs::TransformStamped>::value();
+    case MsgType::kOdometry: return ::ros::message_traits::MD5Sum<nav_msgs::Odometry>::value();
+    case MsgType::kOther: break;
   }
-  return std::monostate();
+  return "*";
+}
+
+// rosbag reads the container (chunks, compression, index); the message body is decoded by our
+// bounds-checked reader (cdr.hpp), the same for ROS 1 and ROS 2.
+Payload Decode(const rosbag::MessageInstance& mi, MsgType type, bool decode_images, const std::string& context, std::vector<std::uint8_t>* buffer) {
+  if (type == MsgType::kOther) return std::monostate();
+  const char* md5 = StandardMd5(type);
+  if (mi.getMD5Sum() != md5 && mi.getMD5Sum() != "*")
+    throw InputError(context + ": " + mi.getDataType() + " with another definition (md5 " + mi.getMD5Sum() + ", the standard one is " + md5 + ")");
+  buffer->resize(mi.size());
+  ::ros::serialization::OStream out(buffer->data(), static_cast<std::uint32_t>(buffer->size()));
+  mi.write(out);
+  return DecodeRos1(type, buffer->data(), buffer->size(), decode_images, context);
 }
 
 class Ros1Recording final : public Recording {
@@ -129,6 +88,7 @@ class Ros1Recording final : public Recording {
       const std::uint32_t total = view.size();
       std::uint32_t done = 0;
       std::map<std::string, std::pair<std::string, std::uint64_t>> seen;  // topic → normalised type, messages so far
+      std::vector<std::uint8_t> buffer;  // one message's serialised bytes, reused
       for (const rosbag::MessageInstance& mi : view) {
         auto& [type, index] = seen[mi.getTopic()];
         if (type.empty()) type = NormaliseTypeName(mi.getDataType());
@@ -137,7 +97,7 @@ class Ros1Recording final : public Recording {
         m.topic = &topic_it->first;
         m.type = &type;
         m.log_ns = static_cast<std::int64_t>(mi.getTime().toNSec());
-        m.payload = Decode(mi, MsgTypeOf(type), decode_images, path_ + ": topic " + mi.getTopic() + ", message " + std::to_string(index++));
+        m.payload = Decode(mi, MsgTypeOf(type), decode_images, path_ + ": topic " + mi.getTopic() + ", message " + std::to_string(index++), &buffer);
         on_message(m);
         if (progress && (++done & 1023) == 0) progress(static_cast<double>(done) / total);
       }
