@@ -214,6 +214,7 @@ class Runner {
         state_.innovation[i].push_back(static_cast<float>(r.visual_mahalanobis));
       }
       if (player_->last_frame() >= 0) last_frame_ = player_->last_frame(), state_.pictures_dirty = true;
+      if (!session_.info().camera) state_.pictures_dirty = true;  // the 3-D view follows every sample
       ++next_;
       if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_))
         checkpoints_.emplace(next_, RunnerCheckpoint{player_->Save(), last_frame_});
@@ -224,9 +225,12 @@ class Runner {
     while (next_ < session_.num_samples() && last_frame_ < target) StepTo(next_);
   }
   Image8 Picture() {
-    if (last_frame_ < 0 || !session_.info().camera) return Image8();
     composer_->orbit = state_.orbit;
-    return composer_->Compose(last_frame_, session_.t(std::max(0, next_ - 1)), state_.layers);
+    const double t = session_.t(std::max(0, next_ - 1));
+    // Without a camera: the external 3-D view of the grasp (hand, estimates, contacts, forces).
+    if (!session_.info().camera) return next_ > 0 ? composer_->ComposeExternal(t, 960, 720, state_.layers) : Image8();
+    if (last_frame_ < 0) return Image8();
+    return composer_->Compose(last_frame_, t, state_.layers);
   }
   int SampleAt(double t) const {
     int k = 0;
@@ -385,7 +389,8 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::SetNextWindowSize(ImVec2(static_cast<float>(width) - kPanelWidth, static_cast<float>(height)));
   ImGui::Begin("views", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
   const float avail = ImGui::GetContentRegionAvail().x;
-  ImGui::Text("camera + estimates (truth dashed) | virtual view | 3-D view");
+  ImGui::TextUnformatted(runner.player().session().info().camera ? "camera + estimates (truth dashed) | virtual view | 3-D view"
+                                                                  : "3-D view (the session has no camera)");
   tex.picture.Show(avail);
   if (ImGui::IsItemHovered()) {
     const ImGuiIO& io = ImGui::GetIO();
@@ -413,11 +418,14 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         const float w = (avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
         char id[48], text[96];
         std::snprintf(id, sizeof(id), "##pos%zu", i);
-        std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(), pe.empty() ? 0.f : pe.back());
+        const bool truth = p.session().has_groundtruth();
+        if (truth) std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(), pe.empty() ? 0.f : pe.back());
+        else std::snprintf(text, sizeof(text), "%s: no ground truth", p.sets()[i].name.c_str());
         ImGui::PlotLines(id, pe.data(), static_cast<int>(pe.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##ori%zu", i);
-        std::snprintf(text, sizeof(text), "orientation error %.1f deg", oe.empty() ? 0.f : oe.back());
+        if (truth) std::snprintf(text, sizeof(text), "orientation error %.1f deg", oe.empty() ? 0.f : oe.back());
+        else std::snprintf(text, sizeof(text), "(no ground truth)");
         ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##sig%zu", i);

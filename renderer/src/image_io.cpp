@@ -46,34 +46,45 @@ class QuietStderr {
 
 constexpr double kMaxPixels = 1 << 28;  // 268 megapixels
 
-}  // namespace
-
-Image8 ReadImage(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
-  // A PNG's header says its size: refuse an absurd one before decoding (a 60000 x 60000 header
-  // made OpenCV assert without naming the file).
-  unsigned char head[24] = {};
-  std::ifstream(path, std::ios::binary).read(reinterpret_cast<char*>(head), sizeof(head));
+// A PNG's header says its size: refuse an absurd one before decoding (a 60000 x 60000 header
+// made OpenCV assert without naming the file).
+void CheckPngHeader(const unsigned char* head, std::size_t n, const std::string& what) {
   static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (std::equal(kPng, kPng + 8, head)) {
-    const auto be32 = [&](int at) { return (double(head[at]) * 256 + head[at + 1]) * 65536 + double(head[at + 2]) * 256 + head[at + 3]; };
-    const double w = be32(16), h = be32(20);
-    if (w < 1 || h < 1 || w * h > kMaxPixels)
-      throw InputError(path + ": the PNG header says " + std::to_string(static_cast<long long>(w)) + "x" +
-                       std::to_string(static_cast<long long>(h)) + " px; expected 1 to 268 million pixels");
-  }
+  if (n < 24 || !std::equal(kPng, kPng + 8, head)) return;
+  const auto be32 = [&](int at) { return (double(head[at]) * 256 + head[at + 1]) * 65536 + double(head[at + 2]) * 256 + head[at + 3]; };
+  const double w = be32(16), h = be32(20);
+  if (w < 1 || h < 1 || w * h > kMaxPixels)
+    throw InputError(what + ": the PNG header says " + std::to_string(static_cast<long long>(w)) + "x" +
+                     std::to_string(static_cast<long long>(h)) + " px; expected 1 to 268 million pixels");
+}
+
+// An OpenCV decode (BGR) as an RGB Image8, its failures as InputError naming `what`.
+template <class Decode>
+Image8 DecodedRgb(const std::string& what, Decode decode) {
   cv::Mat bgr;
   try {
-    const QuietStderr quiet;
-    bgr = cv::imread(path, cv::IMREAD_COLOR);
+    bgr = decode();
   } catch (const cv::Exception& e) {
-    throw InputError(path + ": not a readable image (" + e.err + ")");
+    throw InputError(what + ": not a readable image (" + e.err + ")");
   }
-  if (bgr.empty()) throw InputError(path + ": not a readable image (unknown format, truncated or corrupt)");
+  if (bgr.empty()) throw InputError(what + ": not a readable image (unknown format, truncated or corrupt)");
   Image8 out(bgr.cols, bgr.rows, 3);
   cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
   return out;
+}
+
+}  // namespace
+
+Image8 ReadImage(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
+  unsigned char head[24] = {};
+  std::ifstream(path, std::ios::binary).read(reinterpret_cast<char*>(head), sizeof(head));
+  CheckPngHeader(head, sizeof(head), path);
+  return DecodedRgb(path, [&] {
+    const QuietStderr quiet;
+    return cv::imread(path, cv::IMREAD_COLOR);
+  });
 }
 
 void WriteImage(const std::string& path, const Image8& image) {
@@ -93,18 +104,8 @@ void WriteImage(const std::string& path, const Image8& image) {
 }
 
 Image8 DecodeImage(const std::uint8_t* data, std::size_t size, const std::string& context) {
-  cv::Mat bgr;
-  try {
-    const cv::Mat raw(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
-    bgr = cv::imdecode(raw, cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    throw InputError(context + ": not a readable image (" + e.err + ")");
-  }
-  if (bgr.empty()) throw InputError(context + ": not a readable image (unknown format, truncated or corrupt)");
-  Image8 out(bgr.cols, bgr.rows, 3);
-  cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  return out;
+  CheckPngHeader(data, size, context);
+  return DecodedRgb(context, [&] { return cv::imdecode(cv::Mat(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data)), cv::IMREAD_COLOR); });
 }
 
 }  // namespace inhand

@@ -259,6 +259,16 @@ TEST(Import, RealAllegroBagReplaysWithA3dVideo) {
   const Image8 first = ReadImage(dir / "r/frames/frame_000000.png");
   EXPECT_EQ(first.width, 960);
   EXPECT_EQ(test::RunInhand("compare " + (dir / "r/frames/frame_000000.png") + " " + (dir / "r/frames/frame_000040.png")).exit_code, 1);
+#ifdef INHAND_WITH_GUI
+  // The GUI shows the same 3-D view instead of "(no image yet)".
+  const test::CommandResult gui = test::RunInhand("gui " + (dir / "s") + " --time 4 --frames 2 --screenshot " + (dir / "gui.png"), "env -u DISPLAY");
+  ASSERT_EQ(gui.exit_code, 0) << gui.output;
+  const Image8 shot = ReadImage(dir / "gui.png");
+  long bright = 0;  // the 3-D view's light background fills most of the view panel
+  for (int y = 100; y < 600; y += 4)
+    for (int x = 400; x < 1200; x += 4) bright += shot.pixel(x, y)[0] > 200 && shot.pixel(x, y)[2] > 200;
+  EXPECT_GT(bright, 10000) << "no 3-D view in the GUI";
+#endif
 }
 
 }  // namespace
