@@ -394,10 +394,12 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   std::string image_frame;
   // Images are encoded on every core while the recording is read (one pass over it), into a
   // staging folder; which of them the session keeps is decided once TF is known.
+  // Declared in this order so that the workers are joined (encoders destroyed) before the
+  // slots they write and the folder they write into, also when an error unwinds the stack.
   std::optional<FrameStaging> staging;
+  std::deque<StagedFrame> staged;  // by message index; elements stay put while it grows
   std::optional<EncoderPool> encoders;
   if (!report.image_topic.empty()) staging.emplace(opt.out), encoders.emplace(std::max(1u, std::thread::hardware_concurrency()));
-  std::deque<StagedFrame> staged;  // by message index; elements stay put while it grows
   std::optional<Intrinsics> K;
   std::string K_context;
   std::vector<StampedTransform> truth;

@@ -1,7 +1,7 @@
 #pragma once
 // A ROS recording opened for import: a ROS 1 bag (Debian's rosbag_storage), a ROS 2 MCAP file or
 // a ROS 2 sqlite3 .db3 (our own readers; CDR messages). One interface: the topics with their
-// types, counts and time spans, and the messages of chosen topics in log-time order, decoded.
+// types, counts and time spans, and the messages of chosen topics, decoded.
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -35,9 +35,11 @@ class Recording {
   const std::string& path() const { return path_; }
   // Every topic, sorted by name.
   virtual std::vector<TopicInfo> Topics() = 0;
-  // Calls `on_message` for each message on `topics`, in log-time order (ties in file order).
-  // `decode_images` false leaves Image and CompressedImage payloads empty (monostate): a first
-  // pass over a recording that only needs their stamps. `progress` gets the fraction read.
+  // Calls `on_message` for each message on `topics`: ROS 1 bags and .db3 in log-time order,
+  // MCAP in file order (recorders write it in log-time order; the importer sorts by stamp
+  // anyway). The callback may move the payload out. `decode_images` false leaves the pixel data
+  // of Image and CompressedImage empty (stamps, sizes and encodings are decoded). `progress`
+  // gets the fraction read.
   virtual void Read(const std::vector<std::string>& topics, bool decode_images,
                     const std::function<void(Message&)>& on_message,
                     const std::function<void(double)>& progress = {}) = 0;
