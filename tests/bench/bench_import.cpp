@@ -8,6 +8,8 @@
 #include <sensor_msgs/JointState.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -37,9 +39,18 @@ std::vector<std::uint8_t> Picture(int f, std::mt19937& rng) {
   return data;
 }
 
+// The 268 MB bag, written once per process and removed at exit.
+struct TempFile {
+  std::string path;
+  ~TempFile() {
+    std::error_code ec;
+    std::filesystem::remove(path, ec);
+  }
+};
+
 const std::string& Recording() {
-  static const std::string path = [] {
-    const std::string p = (std::filesystem::temp_directory_path() / "inhand-bench-import.bag").string();
+  static const TempFile file{[] {
+    const std::string p = (std::filesystem::temp_directory_path() / ("inhand-bench-import-" + std::to_string(::getpid()) + ".bag")).string();
     const std::vector<std::string> names = inhand::LoadHandModel(kHand, {{}, false}).QNames();
     rosbag::Bag bag(p, rosbag::bagmode::Write);
     const ros::Time base(1700000000, 0);
@@ -78,12 +89,12 @@ const std::string& Recording() {
     }
     bag.close();
     return p;
-  }();
-  return path;
+  }()};
+  return file.path;
 }
 
 void BM_Import_Ros1Bag_10s_500HzJoints_30Hz640x480(benchmark::State& state) {
-  const std::string out = (std::filesystem::temp_directory_path() / "inhand-bench-import-session").string();
+  const std::string out = (std::filesystem::temp_directory_path() / ("inhand-bench-import-session-" + std::to_string(::getpid()))).string();
   inhand::ros::ImportOptions o;
   o.recording = Recording();
   o.out = out;
