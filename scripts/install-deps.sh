@@ -16,7 +16,7 @@ PACKAGES=(
   librcpputils-dev librcutils-dev libboost-filesystem-dev libboost-regex-dev
   libzstd-dev liblz4-dev libsqlite3-dev libdeflate-dev
   # The official writers the importer is tested against: Debian's rosbag (Python).
-  python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs
+  python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs python3-nav-msgs
 )
 # Node.js for the official MCAP / ROS 2 tools (npm packages below): Debian's, unless a Node.js
 # with npm is installed already (its package conflicts with Debian's npm).

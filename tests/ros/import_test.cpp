@@ -125,6 +125,33 @@ TEST(Import, EveryFormatGivesTheSyntheticRecording) {
   }
 }
 
+// Ground truth from TransformStamped (in the world) and from Odometry (in camera_link, through the
+// dynamic TF edge, interpolated), in every format.
+TEST(Import, GroundTruthFromTransformStampedAndOdometry) {
+  test::TempDir dir;
+  const auto camera_link_object = [](double s) {
+    return MakeTransform(Vec3(0.05, 0.1 + 0.02 * s, -0.03), Quat(Eigen::AngleAxisd(0.3 * s, Vec3::UnitX())));
+  };
+  for (const std::string& format : kFormats) {
+    for (const std::string topic : {"/mocap/object_tf", "/odom"}) {
+      SCOPED_TRACE(format + " " + topic);
+      const std::string out = dir / (format + topic.substr(1));
+      const test::CommandResult r = test::RunInhand(Import(Fixture(format), out, "--no-images --object-pose " + topic));
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+      const Session s = Session::Load(out);
+      ASSERT_EQ(s.groundtruth().size(), 50u);
+      double worst = 0;
+      for (int g = 0; g < 50; ++g) {
+        const double t = (2 * g * 10000000 + 1000000) / 1e9;
+        const Transform expected = topic == "/odom" ? WorldPalm().inverse() * WorldCameraLink(t) * camera_link_object(t) : WorldPalm().inverse() * WorldObject(t);
+        EXPECT_EQ(s.groundtruth()[static_cast<std::size_t>(g)].t, t);
+        worst = std::max(worst, PoseError(expected, s.groundtruth()[static_cast<std::size_t>(g)].T_PO));
+      }
+      EXPECT_LT(worst, 1e-9);
+    }
+  }
+}
+
 // --list names every topic with its type, count and rate, and the TF tree.
 TEST(Import, ListShowsTopicsAndFrames) {
   for (const std::string& format : {std::string("synthetic.bag"), std::string("synthetic_lz4.mcap"), std::string("synthetic.db3")}) {

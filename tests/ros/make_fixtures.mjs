@@ -48,6 +48,18 @@ export function messages() {
     m.push({ topic: "/mocap/object", type: "geometry_msgs/msg/PoseStamped", log: S.truthStampNs(i) + 300000,
       msg: { header: header(S.truthStampNs(i), "world"), pose: { position: { x: pose.t[0], y: pose.t[1], z: pose.t[2] }, orientation: { x: pose.q[0], y: pose.q[1], z: pose.q[2], w: pose.q[3] } } } });
   }
+  // The same motion capture as TransformStamped (in the world) and as Odometry (in camera_link,
+  // so that its pose goes through the dynamic TF edge), every 20 ms.
+  for (let i = 0; i < S.TRUTH_SAMPLES; i += 2) {
+    const ns = S.truthStampNs(i);
+    const pose = S.worldObject(ns * 1e-9);
+    m.push({ topic: "/mocap/object_tf", type: "geometry_msgs/msg/TransformStamped", log: ns + 300000, msg: tf(ns, "world", "object", pose) });
+    const local = S.cameraLinkObject(ns * 1e-9);
+    m.push({ topic: "/odom", type: "nav_msgs/msg/Odometry", log: ns + 300000, msg: { header: header(ns, "camera_link"), child_frame_id: "object",
+      pose: { pose: { position: { x: local.t[0], y: local.t[1], z: local.t[2] }, orientation: { x: local.q[0], y: local.q[1], z: local.q[2], w: local.q[3] } },
+        covariance: new Array(36).fill(0) },
+      twist: { twist: { linear: { x: 0, y: 0, z: 0 }, angular: { x: 0, y: 0, z: 0 } }, covariance: new Array(36).fill(0) } } });
+  }
   for (let f = 0; f < S.FRAMES; ++f) {
     m.push({ topic: "/camera/image_raw", type: "sensor_msgs/msg/Image", log: S.frameStampNs(f) + 4000000, msg: image(f) });
     m.push({ topic: "/camera/camera_info", type: "sensor_msgs/msg/CameraInfo", log: S.frameStampNs(f) + 4000000, msg: cameraInfo(S.frameStampNs(f), S.WIDTH, S.HEIGHT) });

@@ -9,6 +9,7 @@ import sys
 import rosbag
 import rospy
 from geometry_msgs.msg import PoseStamped, TransformStamped
+from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, JointState
 from tf2_msgs.msg import TFMessage
 
@@ -113,6 +114,19 @@ def messages():
         r = about_x(0.1 * s)
         m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w = r
         out.append(("/mocap/object", ns + 300000, m))
+    # The same motion capture as TransformStamped (world) and Odometry (camera_link), every 20 ms.
+    for i in range(0, 100, 2):
+        ns = i * 10000000 + 1000000
+        s = ns * 1e-9
+        out.append(("/mocap/object_tf", ns + 300000, transform(ns, "world", "object", [0.15, 0.2 + 0.05 * s, 0.35], about_x(0.1 * s))))
+        m = Odometry()
+        m.header.stamp = stamp(ns)
+        m.header.frame_id = "camera_link"
+        m.child_frame_id = "object"
+        m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z = 0.05, 0.1 + 0.02 * s, -0.03
+        r = about_x(0.3 * s)
+        m.pose.pose.orientation.x, m.pose.pose.orientation.y, m.pose.pose.orientation.z, m.pose.pose.orientation.w = r
+        out.append(("/odom", ns + 300000, m))
     for f in range(10):
         out.append(("/camera/image_raw", frame_stamp_ns(f) + 4000000, image(f)))
         out.append(("/camera/camera_info", frame_stamp_ns(f) + 4000000, camera_info(frame_stamp_ns(f), WIDTH, HEIGHT)))

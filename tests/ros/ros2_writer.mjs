@@ -29,6 +29,9 @@ export const DEFINITIONS = {
   "tf2_msgs/msg/TFMessage": ["geometry_msgs/TransformStamped[] transforms", TRANSFORM_STAMPED, HEADER, TIME, TRANSFORM, VECTOR3, QUATERNION],
   "geometry_msgs/msg/PoseStamped": ["std_msgs/Header header\nPose pose", HEADER, TIME, POSE, POINT, QUATERNION],
   "geometry_msgs/msg/TransformStamped": ["std_msgs/Header header\nstring child_frame_id\nTransform transform", HEADER, TIME, TRANSFORM, VECTOR3, QUATERNION],
+  "nav_msgs/msg/Odometry": ["std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\ngeometry_msgs/TwistWithCovariance twist",
+    HEADER, TIME, "MSG: geometry_msgs/PoseWithCovariance\nPose pose\nfloat64[36] covariance", POSE, POINT, QUATERNION,
+    "MSG: geometry_msgs/TwistWithCovariance\nTwist twist\nfloat64[36] covariance", "MSG: geometry_msgs/Twist\nVector3 linear\nVector3 angular", VECTOR3],
 };
 
 export class Ros2Writer {

@@ -37,6 +37,8 @@ export const worldPalm = { t: [0.1, 0.2, 0.3], q: aboutZ(Math.PI / 6) };        
 export const cameraLinkOptical = { t: [0, 0, 0], q: [-0.5, 0.5, -0.5, 0.5] };          // static
 export const worldCameraLink = (s) => ({ t: [0.5 + 0.1 * s, -0.2, 0.4], q: aboutZ(0.2 * s) });
 export const worldObject = (s) => ({ t: [0.15, 0.2 + 0.05 * s, 0.35], q: aboutX(0.1 * s) });
+// The object seen from camera_link: a fixed offset there (Odometry's frame in the fixtures).
+export const cameraLinkObject = (s) => ({ t: [0.05, 0.1 + 0.02 * s, -0.03], q: aboutX(0.3 * s) });
 export const tableMarker = { t: [1, 0, 0], q: [0, 0, 0, 1] };                            // a second tree
 
 export function stamp(ns) {
