@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <map>
+#include <memory>
 
 #include "cdr.hpp"
 #include "inhand/core/error.hpp"
@@ -43,12 +44,11 @@ class Db3Recording final : public Recording {
  public:
   explicit Db3Recording(const std::string& path) {
     path_ = path;
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-      const std::string e = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
-      sqlite3_close(db_);
-      throw InputError(path + ": cannot open as sqlite3 (" + e + ")");
-    }
-    Statement s(db_, "SELECT id, name, type, serialization_format FROM topics", path_);
+    sqlite3* db = nullptr;
+    const int rc = sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+    db_.reset(db);  // closed also when this constructor throws below (the fuzzer found the leak)
+    if (rc != SQLITE_OK) throw InputError(path + ": cannot open as sqlite3 (" + (db != nullptr ? sqlite3_errmsg(db) : "out of memory") + ")");
+    Statement s(db_.get(), "SELECT id, name, type, serialization_format FROM topics", path_);
     while (s.Step()) {
       Topic t;
       t.name = s.Text(1);
@@ -58,13 +58,13 @@ class Db3Recording final : public Recording {
       topics_[sqlite3_column_int64(s.get(), 0)] = t;
     }
   }
-  ~Db3Recording() override { sqlite3_close(db_); }
+  ~Db3Recording() override = default;
   std::string format() const override { return "sqlite3 .db3"; }
 
   std::vector<TopicInfo> Topics() override {
     std::map<std::string, TopicInfo> by_name;
     for (const auto& [id, t] : topics_) by_name[t.name] = TopicInfo{t.name, t.type, 0, 0, 0};
-    Statement s(db_, "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id", path_);
+    Statement s(db_.get(), "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id", path_);
     while (s.Step()) {
       auto it = topics_.find(sqlite3_column_int64(s.get(), 0));
       if (it == topics_.end()) continue;
@@ -91,10 +91,10 @@ class Db3Recording final : public Recording {
     if (ids.empty()) return;
     std::int64_t total = 0;
     {
-      Statement c(db_, "SELECT COUNT(*) FROM messages WHERE topic_id IN (" + ids + ")", path_);
+      Statement c(db_.get(), "SELECT COUNT(*) FROM messages WHERE topic_id IN (" + ids + ")", path_);
       if (c.Step()) total = sqlite3_column_int64(c.get(), 0);
     }
-    Statement s(db_, "SELECT topic_id, timestamp, data FROM messages WHERE topic_id IN (" + ids + ") ORDER BY timestamp, id", path_);
+    Statement s(db_.get(), "SELECT topic_id, timestamp, data FROM messages WHERE topic_id IN (" + ids + ") ORDER BY timestamp, id", path_);
     std::map<std::int64_t, std::uint64_t> index;
     std::int64_t done = 0;
     while (s.Step()) {
@@ -117,7 +117,10 @@ class Db3Recording final : public Recording {
     std::string name, type, format;
     MsgType msg_type = MsgType::kOther;
   };
-  sqlite3* db_ = nullptr;
+  struct Close {
+    void operator()(sqlite3* db) const { sqlite3_close_v2(db); }
+  };
+  std::unique_ptr<sqlite3, Close> db_;
   std::map<std::int64_t, Topic> topics_;
 };
 

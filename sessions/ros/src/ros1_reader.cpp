@@ -11,9 +11,11 @@
 #include <sensor_msgs/JointState.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <cstring>
 #include <map>
 
 #include "cdr.hpp"
+#include "mapped_file.hpp"
 #include "inhand/core/error.hpp"
 #include "recordings.hpp"
 
@@ -51,10 +53,57 @@ Payload Decode(const rosbag::MessageInstance& mi, MsgType type, bool decode_imag
   return DecodeRos1(type, buffer->data(), buffer->size(), decode_images, context);
 }
 
+// The bag's record structure checked before rosbag sees it: rosbag's header parser (cpp_common's
+// ros::Header::parse) reads past its buffer when a field length is corrupt (AddressSanitizer on
+// a fuzzed bag). Records are <header_len><header><data_len><data>, a header a sequence of
+// <field_len><name=value>; uncompressed chunks hold records of the same form. Lengths must fit,
+// every field must have its '='. (Compressed chunks are left to rosbag.)
+std::uint32_t Le32(const std::uint8_t* p) { return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 | std::uint32_t{p[3]} << 24; }
+
+void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n, std::size_t base, bool top_level) {
+  std::size_t pos = 0;
+  const auto fail = [&](std::size_t at, const std::string& what) {
+    throw InputError(path + ": corrupt ROS 1 bag at byte " + std::to_string(base + at) + " (" + what + ")");
+  };
+  while (pos < n) {
+    if (n - pos < 4) fail(pos, "a record is cut off");
+    const std::uint32_t header_len = Le32(d + pos);
+    if (header_len > n - pos - 4) fail(pos, "a record header of " + std::to_string(header_len) + " bytes runs past the end");
+    const std::uint8_t* h = d + pos + 4;
+    std::string op, compression;
+    for (std::size_t f = 0; f < header_len;) {
+      if (header_len - f < 4) fail(pos + 4 + f, "a header field length is cut off");
+      const std::uint32_t field_len = Le32(h + f);
+      if (field_len > header_len - f - 4) fail(pos + 4 + f, "a header field of " + std::to_string(field_len) + " bytes runs past its header");
+      const auto* field = reinterpret_cast<const char*>(h + f + 4);
+      const char* eq = static_cast<const char*>(std::memchr(field, '=', field_len));
+      if (eq == nullptr) fail(pos + 4 + f, "a header field without '='");
+      const std::string name(field, eq), value(eq + 1, field + field_len);
+      if (name == "op") op = value;
+      if (name == "compression") compression = value;
+      f += 4 + field_len;
+    }
+    const std::size_t data_at = pos + 4 + header_len;
+    if (n - data_at < 4) fail(data_at, "a record's data length is cut off");
+    const std::uint32_t data_len = Le32(d + data_at);
+    if (data_len > n - data_at - 4) fail(data_at, "record data of " + std::to_string(data_len) + " bytes runs past the end");
+    if (top_level && op == std::string(1, '\x05') && compression == "none") CheckRecords(path, d + data_at + 4, data_len, base + data_at + 4, false);
+    pos = data_at + 4 + data_len;
+  }
+}
+
+void CheckBag(const std::string& path) {
+  const MappedFile file(path);
+  constexpr std::size_t kMagic = 13;  // "#ROSBAG V2.0\n"
+  if (file.size() < kMagic) throw InputError(path + ": not a ROS 1 bag (shorter than its magic line)");
+  CheckRecords(path, file.data() + kMagic, file.size() - kMagic, kMagic, true);
+}
+
 class Ros1Recording final : public Recording {
  public:
   explicit Ros1Recording(const std::string& path) {
     path_ = path;
+    CheckBag(path);
     try {
       bag_.open(path, rosbag::bagmode::Read);
     } catch (const std::exception& e) {
