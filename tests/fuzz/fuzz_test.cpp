@@ -36,13 +36,6 @@ int Runs() {
   return env ? std::max(1, std::atoi(env)) : 1000;
 }
 
-std::string Read(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 class Mutator {
  public:
   explicit Mutator(unsigned seed) : rng_(seed) {}
@@ -205,7 +198,7 @@ std::string CheckSession(const Session& s) {
 TEST(Fuzz, SessionFiles) {
   SmallSession base;
   for (const std::string file : {"session.json", "joints.csv", "camera.csv", "groundtruth.csv"}) {
-    const std::string valid = Read(base.dir / file);
+    const std::string valid = test::ReadFile(base.dir / file);
     test::TempDir work;
     fs::copy(base.dir.path(), work / "s", fs::copy_options::recursive);
     Fuzz(file, valid, [&](const std::string& text) {
@@ -233,7 +226,7 @@ TEST(Fuzz, ObjectFile) {
   const std::string src = test::ProjectAsset("objects/brush");
   test::TempDir work;
   fs::copy(src, work / "o", fs::copy_options::recursive);
-  Fuzz("object.json", Read(src + "/object.json"), [&](const std::string& text) {
+  Fuzz("object.json", test::ReadFile(src + "/object.json"), [&](const std::string& text) {
     std::ofstream(work / "o/object.json", std::ios::binary) << text;
     const ObjectModel o = LoadObjectModel(work / "o/object.json");
     if (!(o.mass > 0) || !std::isfinite(o.mass) || o.pieces.empty()) return std::string("a mass or pieces out of range");
@@ -246,7 +239,7 @@ TEST(Fuzz, ObjectFile) {
 TEST(Fuzz, Urdf) {
   const std::string path = test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf");
   const std::string dir = fs::path(path).parent_path().string();
-  Fuzz("urdf", Read(path), [&](const std::string& text) {
+  Fuzz("urdf", test::ReadFile(path), [&](const std::string& text) {
     const HandModel h = ParseHandModel(text, dir, "hand.urdf", {{}, false});
     for (const Joint& j : h.joints)
       if (!j.T_LJ.matrix().allFinite() || !j.axis.allFinite() || (j.has_limits && !(j.lower <= j.upper)))
@@ -258,7 +251,7 @@ TEST(Fuzz, Urdf) {
 // ROS recordings: our MCAP reader (plain and zstd chunks), CDR decoder and .db3 reader, on
 // mutations of the fixtures the official tools wrote. Every topic is read and decoded.
 void FuzzRecording(const std::string& fixture) {
-  const std::string valid = Read(test::SourceDir() + "/tests/ros/fixtures/" + fixture);
+  const std::string valid = test::ReadFile(test::SourceDir() + "/tests/ros/fixtures/" + fixture);
   test::TempDir work;
   const std::string path = work / ("r" + fs::path(fixture).extension().string());
   Fuzz(fixture, valid, [&](const std::string& bytes) {

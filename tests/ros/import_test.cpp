@@ -31,13 +31,6 @@ const std::string kObject = test::ProjectAsset("objects/ketchup_bottle/object.js
 std::string Import(const std::string& recording, const std::string& out, const std::string& extra = "") {
   return "import " + recording + " --out " + out + " --hand " + kHand + " --object " + kObject + " " + extra;
 }
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // The synthetic recording's poses (synthetic.mjs).
 Transform AboutZ(const Vec3& p, double a) { return MakeTransform(p, Quat(Eigen::AngleAxisd(a, Vec3::UnitZ()))); }
 Transform WorldPalm() { return AboutZ(Vec3(0.1, 0.2, 0.3), M_PI / 6); }
@@ -116,11 +109,11 @@ TEST(Import, EveryFormatGivesTheSyntheticRecording) {
     EXPECT_LT(PoseError(s.info().initial_T_PO, WorldPalm().inverse() * WorldObject(0.001)), 1e-9);
     // The same bytes whichever writer made the recording.
     if (first_joints.empty()) {
-      first_joints = ReadText(out + "/joints.csv"), first_camera = ReadText(out + "/camera.csv"), first_truth = ReadText(out + "/groundtruth.csv");
+      first_joints = test::ReadFile(out + "/joints.csv"), first_camera = test::ReadFile(out + "/camera.csv"), first_truth = test::ReadFile(out + "/groundtruth.csv");
     } else {
-      EXPECT_EQ(ReadText(out + "/joints.csv"), first_joints);
-      EXPECT_EQ(ReadText(out + "/camera.csv"), first_camera);
-      EXPECT_EQ(ReadText(out + "/groundtruth.csv"), first_truth);
+      EXPECT_EQ(test::ReadFile(out + "/joints.csv"), first_joints);
+      EXPECT_EQ(test::ReadFile(out + "/camera.csv"), first_camera);
+      EXPECT_EQ(test::ReadFile(out + "/groundtruth.csv"), first_truth);
     }
   }
 }
@@ -184,7 +177,7 @@ TEST(Import, BadInputIsOneClearLineAndNoOutput) {
   const std::string bag = Fixture("synthetic.bag"), mcap = Fixture("synthetic_zstd.mcap");
   dir.Write("notabag.bag", "this is not a recording\n");
   for (const auto& [name, size] : {std::pair<std::string, double>{"synthetic.bag", 0.6}, {"synthetic_zstd.mcap", 0.6}, {"synthetic.mcap", 0.3}}) {
-    const std::string all = ReadText(Fixture(name));
+    const std::string all = test::ReadFile(Fixture(name));
     dir.Write("cut_" + name, all.substr(0, static_cast<std::size_t>(size * static_cast<double>(all.size()))));
   }
   dir.Write("finger.urdf",

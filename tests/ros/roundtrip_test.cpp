@@ -18,13 +18,6 @@ namespace fs = std::filesystem;
 namespace inhand {
 namespace {
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 int Shell(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
 
 // The simulated session made representable in a recording: times on whole nanoseconds (ROS
@@ -71,7 +64,7 @@ TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
   ASSERT_EQ(Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " + (dir / "rec.mcap") + " zstd"), 0);
   ASSERT_EQ(Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " + (dir / "rec.db3")), 0);
   ASSERT_EQ(test::RunInhand("replay " + (dir / "orig") + " --no-video --out " + (dir / "replay_orig")).exit_code, 0);
-  const std::string estimates = ReadText(dir / "replay_orig/estimates.csv");
+  const std::string estimates = test::ReadFile(dir / "replay_orig/estimates.csv");
   ASSERT_GT(estimates.size(), 1000u);
 
   for (const std::string rec : {"rec.bag", "rec.mcap", "rec.db3"}) {
@@ -84,16 +77,16 @@ TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     // Joints, camera poses and truth to the last digit; every image byte for byte.
     for (const char* file : {"joints.csv", "camera.csv", "groundtruth.csv"})
-      EXPECT_EQ(ReadText(out + "/" + file), ReadText(dir / ("orig/" + std::string(file)))) << file;
+      EXPECT_EQ(test::ReadFile(out + "/" + file), test::ReadFile(dir / ("orig/" + std::string(file)))) << file;
     const Session imported = Session::Load(out);
     ASSERT_EQ(imported.camera_frames().size(), orig.camera_frames().size());
     for (std::size_t i = 0; i < orig.camera_frames().size(); ++i)
-      ASSERT_EQ(ReadText(imported.Resolve(imported.camera_frames()[i].image)), ReadText(orig.Resolve(orig.camera_frames()[i].image))) << i;
+      ASSERT_EQ(test::ReadFile(imported.Resolve(imported.camera_frames()[i].image)), test::ReadFile(orig.Resolve(orig.camera_frames()[i].image))) << i;
     EXPECT_EQ(imported.info().initial_T_PO.matrix(), T0.matrix());
     EXPECT_EQ(imported.info().camera->fx, orig.info().camera->fx);
     // And so the same estimates, for all four sets.
     ASSERT_EQ(test::RunInhand("replay " + out + " --no-video --out " + out + "_replay").exit_code, 0);
-    EXPECT_EQ(ReadText(out + "_replay/estimates.csv"), estimates);
+    EXPECT_EQ(test::ReadFile(out + "_replay/estimates.csv"), estimates);
   }
 }
 
@@ -109,7 +102,7 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   ASSERT_EQ(test::RunInhand("replay " + (dir / "sim") + " --no-video --mcap --modalities j,jta --out " + (dir / "r")).exit_code, 0);
   const std::string json_path = dir / "check.json";
   ASSERT_EQ(std::system(("node " + tools + "/check_mcap.mjs " + (dir / "r/replay.mcap") + " > " + json_path).c_str()), 0);
-  const nlohmann::json j = nlohmann::json::parse(ReadText(json_path));
+  const nlohmann::json j = nlohmann::json::parse(test::ReadFile(json_path));
   const long n = s.num_samples(), frames = static_cast<long>(s.camera_frames().size());
   const auto count = [&](const std::string& topic) { return j.at("topics").at(topic).at("count").get<long>(); };
   EXPECT_EQ(count("/inhand/pose/j"), n);

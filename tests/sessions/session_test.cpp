@@ -70,13 +70,6 @@ std::string WriteSession(const test::TempDir& dir, const std::string& name = "s"
   return dir / name;
 }
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 TEST(Session, WriteReadRoundTripIsExact) {
   test::TempDir dir;
   const std::string path = WriteSession(dir);
@@ -99,7 +92,7 @@ TEST(Session, WriteReadRoundTripIsExact) {
   EXPECT_NEAR(mid.translation().x(), 0.0105, 1e-12);
   EXPECT_NEAR(LogSO3(mid.linear()).z(), 0.105, 1e-9);
   EXPECT_TRUE(fs::exists(path + "/truth/biases.json"));
-  EXPECT_NE(ReadText(path + "/session.json").find("\"seed\": 7"), std::string::npos);
+  EXPECT_NE(test::ReadFile(path + "/session.json").find("\"seed\": 7"), std::string::npos);
 
   // Joints match the hand by name; the session keeps the file's column order.
   const std::vector<std::string> file_order = s.joint_names();
@@ -128,7 +121,7 @@ class BadSession : public ::testing::Test {
  protected:
   void SetUp() override { path_ = WriteSession(dir_); }
   void Replace(const std::string& file, const std::string& pattern, const std::string& with) {
-    const std::string text = ReadText(path_ + "/" + file);
+    const std::string text = test::ReadFile(path_ + "/" + file);
     const std::string out = std::regex_replace(text, std::regex(pattern), with, std::regex_constants::format_first_only);
     ASSERT_NE(out, text) << "pattern not found: " << pattern;
     std::ofstream(path_ + "/" + file) << out;

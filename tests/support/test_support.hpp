@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 
 namespace inhand::test {
@@ -23,6 +25,14 @@ inline std::string SharedAssets() {
     if (::inhand::test::SharedAssets().empty())                                   \
       GTEST_SKIP() << "../shared/assets is absent: third-party assets not tested"; \
   } while (false)
+
+// A whole file's bytes ("" when it cannot be read).
+inline std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
 
 // A fresh directory under the build's temp area, removed at destruction.
 class TempDir {
