@@ -13,6 +13,7 @@
 
 #include <cstring>
 #include <map>
+#include <set>
 
 #include "cdr.hpp"
 #include "mapped_file.hpp"
@@ -53,14 +54,30 @@ Payload Decode(const rosbag::MessageInstance& mi, MsgType type, bool decode_imag
   return DecodeRos1(type, buffer->data(), buffer->size(), decode_images, context);
 }
 
-// The bag's record structure checked before rosbag sees it: rosbag's header parser (cpp_common's
-// ros::Header::parse) reads past its buffer when a field length is corrupt (AddressSanitizer on
-// a fuzzed bag). Records are <header_len><header><data_len><data>, a header a sequence of
-// <field_len><name=value>; uncompressed chunks hold records of the same form. Lengths must fit,
-// every field must have its '='. (Compressed chunks are left to rosbag.)
+// The bag's structure checked before rosbag sees it: rosbag trusts every length and offset in
+// the file. Under AddressSanitizer its header parser (cpp_common's ros::Header::parse) read past
+// its buffer on a corrupt field length, and a corrupt message offset in an index record made it
+// read outside the chunk (a segfault in readHeaderFromBuffer). Records are
+// <header_len><header><data_len><data>, a header a sequence of <field_len><name=value>;
+// uncompressed chunks hold records of the same form. Checked: every length fits, every field has
+// its '=', index entries point at message records of the chunk before them, chunk infos at
+// chunks, the bag header's index_pos at a record. (Inside compressed chunks rosbag is on its own.)
 std::uint32_t Le32(const std::uint8_t* p) { return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 | std::uint32_t{p[3]} << 24; }
+std::uint64_t Le64(const std::string& v) {
+  std::uint64_t x = 0;
+  for (std::size_t i = 0; i < 8 && i < v.size(); ++i) x |= std::uint64_t{static_cast<std::uint8_t>(v[i])} << (8 * i);
+  return v.size() == 8 ? x : ~std::uint64_t{0};
+}
 
-void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n, std::size_t base, bool top_level) {
+struct BagLayout {
+  std::set<std::uint64_t> records, chunks;  // file offsets of top-level records and chunk records
+  std::set<std::uint32_t> chunk_messages;   // offsets of message records in the last chunk
+  bool chunk_known = false;                 // the last chunk was uncompressed (and so checked)
+  std::uint64_t index_pos = 0;
+  std::vector<std::pair<std::size_t, std::uint64_t>> chunk_infos;  // (at, chunk_pos)
+};
+
+void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n, std::size_t base, BagLayout* top, std::set<std::uint32_t>* messages) {
   std::size_t pos = 0;
   const auto fail = [&](std::size_t at, const std::string& what) {
     throw InputError(path + ": corrupt ROS 1 bag at byte " + std::to_string(base + at) + " (" + what + ")");
@@ -70,7 +87,7 @@ void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n,
     const std::uint32_t header_len = Le32(d + pos);
     if (header_len > n - pos - 4) fail(pos, "a record header of " + std::to_string(header_len) + " bytes runs past the end");
     const std::uint8_t* h = d + pos + 4;
-    std::string op, compression;
+    std::map<std::string, std::string> fields;
     for (std::size_t f = 0; f < header_len;) {
       if (header_len - f < 4) fail(pos + 4 + f, "a header field length is cut off");
       const std::uint32_t field_len = Le32(h + f);
@@ -78,16 +95,36 @@ void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n,
       const auto* field = reinterpret_cast<const char*>(h + f + 4);
       const char* eq = static_cast<const char*>(std::memchr(field, '=', field_len));
       if (eq == nullptr) fail(pos + 4 + f, "a header field without '='");
-      const std::string name(field, eq), value(eq + 1, field + field_len);
-      if (name == "op") op = value;
-      if (name == "compression") compression = value;
+      fields[std::string(field, eq)] = std::string(eq + 1, field + field_len);
       f += 4 + field_len;
     }
     const std::size_t data_at = pos + 4 + header_len;
     if (n - data_at < 4) fail(data_at, "a record's data length is cut off");
     const std::uint32_t data_len = Le32(d + data_at);
     if (data_len > n - data_at - 4) fail(data_at, "record data of " + std::to_string(data_len) + " bytes runs past the end");
-    if (top_level && op == std::string(1, '\x05') && compression == "none") CheckRecords(path, d + data_at + 4, data_len, base + data_at + 4, false);
+    const std::string op = fields.count("op") ? fields["op"] : std::string();
+    const std::uint8_t* data = d + data_at + 4;
+    if (messages != nullptr) {
+      if (op == std::string(1, '\x02')) messages->insert(static_cast<std::uint32_t>(pos));
+    } else {
+      top->records.insert(base + pos);
+      if (op == std::string(1, '\x03')) {
+        top->index_pos = Le64(fields["index_pos"]);
+      } else if (op == std::string(1, '\x05')) {
+        top->chunks.insert(base + pos);
+        top->chunk_messages.clear();
+        top->chunk_known = fields["compression"] == "none";
+        if (top->chunk_known) CheckRecords(path, data, data_len, base + data_at + 4, nullptr, &top->chunk_messages);
+      } else if (op == std::string(1, '\x04') && top->chunk_known) {
+        const std::string& count_field = fields["count"];
+        const std::uint32_t count = count_field.size() == 4 ? Le32(reinterpret_cast<const std::uint8_t*>(count_field.data())) : ~0u;
+        if (count_field.size() != 4 || std::uint64_t{count} * 12 != data_len) fail(pos, "an index record whose count does not match its data");
+        for (std::uint32_t i = 0; i < count; ++i)
+          if (!top->chunk_messages.count(Le32(data + 12 * i + 8))) fail(data_at + 4 + 12 * i, "an index entry that points at no message of its chunk");
+      } else if (op == std::string(1, '\x06')) {
+        top->chunk_infos.emplace_back(pos, Le64(fields["chunk_pos"]));
+      }
+    }
     pos = data_at + 4 + data_len;
   }
 }
@@ -96,7 +133,13 @@ void CheckBag(const std::string& path) {
   const MappedFile file(path);
   constexpr std::size_t kMagic = 13;  // "#ROSBAG V2.0\n"
   if (file.size() < kMagic) throw InputError(path + ": not a ROS 1 bag (shorter than its magic line)");
-  CheckRecords(path, file.data() + kMagic, file.size() - kMagic, kMagic, true);
+  BagLayout layout;
+  CheckRecords(path, file.data() + kMagic, file.size() - kMagic, kMagic, &layout, nullptr);
+  if (layout.index_pos != 0 && !layout.records.count(layout.index_pos))
+    throw InputError(path + ": corrupt ROS 1 bag (its index position " + std::to_string(layout.index_pos) + " is no record)");
+  for (const auto& [at, chunk_pos] : layout.chunk_infos)
+    if (!layout.chunks.count(chunk_pos))
+      throw InputError(path + ": corrupt ROS 1 bag at byte " + std::to_string(kMagic + at) + " (a chunk info that points at no chunk)");
 }
 
 class Ros1Recording final : public Recording {
