@@ -97,8 +97,8 @@ void McapExport::AddSample(int k) {
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const EstimateRecord& r = p_.last(i);
     const std::string& name = p_.sets()[i].name;
-    w_->Write(pose_channels_[i], log, Json{{"timestamp", Time(t)}, {"frame_id", "palm"}, {"pose", PoseJson(r.T_PO)}}.dump());
     const Json pose = PoseJson(r.T_PO);
+    w_->Write(pose_channels_[i], log, Json{{"timestamp", Time(t)}, {"frame_id", "palm"}, {"pose", pose}}.dump());
     w_->Write(tf_, log, Json{{"timestamp", Time(t)}, {"parent_frame_id", "palm"}, {"child_frame_id", "object_" + name},
                              {"translation", pose["position"]}, {"rotation", pose["orientation"]}}.dump());
     Json e = {{"sigma_position_mm", {r.sigma_position.x() * 1000, r.sigma_position.y() * 1000, r.sigma_position.z() * 1000}},

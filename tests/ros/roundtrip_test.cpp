@@ -18,6 +18,10 @@ namespace fs = std::filesystem;
 namespace inhand {
 namespace {
 
+// The scripts beside this file, and the official npm tools they run (installed by install-deps).
+const std::string tools = test::SourceDir() + "/tests/ros";
+bool HaveNodeTools() { return fs::is_directory(tools + "/node/node_modules/@mcap/core"); }
+
 int Shell(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
 
 // The simulated session made representable in a recording: times on whole nanoseconds (ROS
@@ -45,9 +49,7 @@ void WriteRepresentable(const Session& sim, const std::string& out) {
 }
 
 TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
-  const std::string tools = test::SourceDir() + "/tests/ros";
-  if (!fs::is_directory(tools + "/node/node_modules/@mcap/core"))
-    GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
+  if (!HaveNodeTools()) GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
   test::TempDir dir;
   ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 3 --out " + (dir / "sim")).exit_code, 0);
   WriteRepresentable(Session::Load(dir / "sim"), dir / "orig");
@@ -93,9 +95,7 @@ TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
 // replay --mcap: the official MCAP reader (@mcap/core, CRCs checked) reads the export back, with
 // every topic, its foxglove schema, the expected message counts and the session's time span.
 TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
-  const std::string tools = test::SourceDir() + "/tests/ros";
-  if (!fs::is_directory(tools + "/node/node_modules/@mcap/core"))
-    GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
+  if (!HaveNodeTools()) GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
   test::TempDir dir;
   ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "sim")).exit_code, 0);
   const Session s = Session::Load(dir / "sim");

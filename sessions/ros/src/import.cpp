@@ -401,10 +401,8 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   std::optional<EncoderPool> encoders;
   if (!report.image_topic.empty()) staging.emplace(opt.out), encoders.emplace(std::max(1u, std::thread::hardware_concurrency()));
   std::optional<Intrinsics> K;
-  std::string K_context;
   std::vector<StampedTransform> truth;
   TfTree tree;
-  const bool has_images = !report.image_topic.empty();
   rec->Read(read, true, [&](Message& m) {
     const std::string& topic = *m.topic;
     if (topic == report.joints_topic) {
@@ -464,8 +462,7 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
       });
     } else if (topic == report.camera_info_topic) {
       if (!K) {
-        K_context = path + ": " + topic + " message 0";
-        K = IntrinsicsOf(std::get<CameraInfoMsg>(m.payload), K_context);
+        K = IntrinsicsOf(std::get<CameraInfoMsg>(m.payload), path + ": " + topic + " message 0");
       }
     } else if (topic == report.object_pose_topic) {
       StampedTransform t = std::get<StampedTransform>(m.payload);
@@ -519,7 +516,7 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
 
   // The camera's pose at each frame, from TF.
   std::vector<FrameRef> frames;
-  if (has_images) {
+  if (!report.image_topic.empty()) {
     if (!K) throw InputError(path + ": " + report.camera_info_topic + " has no messages: the camera's intrinsics are unknown");
     report.camera_frame = opt.camera_frame.empty() ? image_frame : opt.camera_frame;
     if (report.camera_frame.empty()) throw InputError(path + ": " + report.image_topic + " messages have no frame_id; name the camera's TF frame with --camera-frame");
@@ -547,7 +544,6 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
       frames.push_back({stamp, index, *T});
     }
   }
-  report.image_messages = image_stamps.size();
 
   // Ground truth in the palm frame.
   std::vector<std::pair<std::int64_t, Pose>> gt;
