@@ -10,7 +10,10 @@
 #include <BulletCollision/NarrowPhaseCollision/btPointCollector.h>
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
+#include <map>
 
 #include "inhand/core/error.hpp"
 
@@ -75,11 +78,88 @@ Shape MakeShape(const ConvexPiece& piece) {
   INHAND_CHECK(false, "unknown convex piece kind");
 }
 
+// A link piece seen by the object's distance field: a sphere or a capsule by its core (centre
+// or segment) and radius, anything else by points on its surface, grouped into patches with a
+// bounding sphere each so that the field's 1-Lipschitz bound skips most of them.
+struct FieldProbe {
+  enum class Kind { kSphere, kSegment, kPoints } kind = Kind::kPoints;
+  double radius = 0.0;          // sphere / capsule radius
+  Vec3 a_B = Vec3::Zero();      // centre, or segment end
+  Vec3 b_B = Vec3::Zero();      // segment end
+  Vec3 center_B = Vec3::Zero();  // bounding sphere of the piece
+  double bound = 0.0;
+  struct Patch {
+    Vec3 center_B;
+    double radius;
+    int first, count;
+  };
+  std::vector<Patch> patches;
+  std::vector<Vec3> points_B;
+};
+
+constexpr double kSampleSpacing = 1.5e-3;  // [m] between surface samples of boxes and hulls
+constexpr double kPatchSize = 6e-3;        // [m] patch cell
+
+FieldProbe MakeProbe(const ConvexPiece& piece) {
+  FieldProbe p;
+  p.center_B = piece.bounding_center;
+  p.bound = piece.bounding_radius;
+  if (piece.kind == ConvexPiece::Kind::kSphere) {
+    p.kind = FieldProbe::Kind::kSphere;
+    p.radius = piece.radius;
+    p.a_B = piece.T_BS.translation();
+    return p;
+  }
+  if (piece.kind == ConvexPiece::Kind::kCapsule) {
+    p.kind = FieldProbe::Kind::kSegment;
+    p.radius = piece.radius;
+    p.a_B = piece.T_BS * Vec3(0, 0, -piece.half_length);
+    p.b_B = piece.T_BS * Vec3(0, 0, piece.half_length);
+    return p;
+  }
+  // Points on every face at kSampleSpacing (barycentric grid per triangle, shared edges
+  // deduplicated), then patches by a grid of kPatchSize cells in the body frame.
+  std::map<std::array<long long, 3>, Vec3> unique;
+  for (const auto& t : piece.hull_triangles) {
+    const Vec3& A = piece.hull_vertices[t[0]];
+    const Vec3& B = piece.hull_vertices[t[1]];
+    const Vec3& C = piece.hull_vertices[t[2]];
+    const double longest = std::max({(B - A).norm(), (C - B).norm(), (A - C).norm()});
+    const int n = std::max(1, static_cast<int>(std::ceil(longest / kSampleSpacing)));
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j) {
+        const Vec3 x = A + (B - A) * (double(i) / n) + (C - A) * (double(j) / n);
+        const std::array<long long, 3> key{std::llround(x.x() * 1e7), std::llround(x.y() * 1e7), std::llround(x.z() * 1e7)};
+        unique.emplace(key, x);
+      }
+  }
+  std::map<std::array<long long, 3>, std::vector<Vec3>> cells;
+  for (const auto& [key, x] : unique) {
+    const std::array<long long, 3> cell{static_cast<long long>(std::floor(x.x() / kPatchSize)),
+                                        static_cast<long long>(std::floor(x.y() / kPatchSize)),
+                                        static_cast<long long>(std::floor(x.z() / kPatchSize))};
+    cells[cell].push_back(x);
+  }
+  for (const auto& [cell, pts] : cells) {
+    FieldProbe::Patch patch;
+    patch.first = static_cast<int>(p.points_B.size());
+    patch.count = static_cast<int>(pts.size());
+    Aabb box;
+    for (const Vec3& x : pts) box.Extend(x), p.points_B.push_back(x);
+    patch.center_B = box.Center();
+    patch.radius = 0.5 * box.Size().norm();
+    p.patches.push_back(patch);
+  }
+  return p;
+}
+
 }  // namespace
 
 struct BulletContactQuery::Impl {
   std::vector<std::vector<Shape>> link_shapes;  // per link, possibly empty
   std::vector<Shape> object_shapes;
+  std::shared_ptr<const DistanceField> field;
+  std::vector<std::vector<FieldProbe>> link_probes;  // per link, when `field` is set
   btVoronoiSimplexSolver simplex;
   btGjkEpaPenetrationDepthSolver epa;
   Stats stats;
@@ -109,10 +189,102 @@ struct BulletContactQuery::Impl {
     return pair;
   }
 
+  // The deepest (or nearest) point of one link piece against the field, in the object frame.
+  // Returns the signed distance; `x_O` is the point of the probe's core (sphere centre, segment
+  // point or surface sample) where it is reached.
+  double FieldDistance(const FieldProbe& probe, const Transform& T_OL, double prune, Vec3& x_O) {
+    const DistanceField& f = *field;
+    switch (probe.kind) {
+      case FieldProbe::Kind::kSphere:
+        ++stats.pairs_tested;
+        x_O = T_OL * probe.a_B;
+        return f.Distance(x_O) - probe.radius;
+      case FieldProbe::Kind::kSegment: {
+        ++stats.pairs_tested;
+        // Dense samples along the segment, then golden-section refinement around the best.
+        const Vec3 a = T_OL * probe.a_B, b = T_OL * probe.b_B;
+        const int n = std::clamp(static_cast<int>((b - a).norm() / (0.5 * f.spacing)), 1, 128);
+        double best = std::numeric_limits<double>::infinity();
+        int best_i = 0;
+        for (int i = 0; i <= n; ++i) {
+          const double d = f.Distance(a + (b - a) * (double(i) / n));
+          if (d < best) best = d, best_i = i;
+        }
+        double lo = std::max(0.0, (best_i - 1.0) / n), hi = std::min(1.0, (best_i + 1.0) / n);
+        constexpr double kGolden = 0.6180339887498949;
+        for (int it = 0; it < 20; ++it) {
+          const double m1 = hi - kGolden * (hi - lo), m2 = lo + kGolden * (hi - lo);
+          if (f.Distance(a + (b - a) * m1) < f.Distance(a + (b - a) * m2)) hi = m2; else lo = m1;
+        }
+        const Vec3 x = a + (b - a) * (0.5 * (lo + hi));
+        const double d = f.Distance(x);
+        x_O = d < best ? x : Vec3(a + (b - a) * (double(best_i) / n));
+        return std::min(d, best) - probe.radius;
+      }
+      case FieldProbe::Kind::kPoints: {
+        double best = std::numeric_limits<double>::infinity();
+        for (const FieldProbe::Patch& patch : probe.patches) {
+          if (f.Distance(T_OL * patch.center_B) - patch.radius > std::min(best, prune)) {
+            ++stats.pairs_skipped;
+            continue;
+          }
+          ++stats.pairs_tested;
+          for (int i = patch.first; i < patch.first + patch.count; ++i) {
+            const Vec3 x = T_OL * probe.points_B[static_cast<std::size_t>(i)];
+            const double d = f.Distance(x);
+            if (d < best) best = d, x_O = x;
+          }
+        }
+        return best;
+      }
+    }
+    return std::numeric_limits<double>::infinity();
+  }
+
+  void RunField(const std::vector<Transform>& T_PL, const Transform& T_PO, double max_distance,
+                bool broad_phase, std::vector<ContactPair>& out) {
+    const Transform T_OP = T_PO.inverse();
+    for (std::size_t l = 0; l < link_probes.size(); ++l) {
+      const Transform T_OL = T_OP * T_PL[l];
+      double best = std::numeric_limits<double>::infinity();
+      Vec3 best_x = Vec3::Zero();
+      double best_radius = 0.0;
+      for (const FieldProbe& probe : link_probes[l]) {
+        const double prune = std::max(std::min(best, max_distance), 0.0);
+        if (broad_phase && field->Distance(T_OL * probe.center_B) - probe.bound > prune) {
+          ++stats.pairs_skipped;
+          continue;
+        }
+        Vec3 x;
+        const double d = FieldDistance(probe, T_OL, broad_phase ? prune : std::numeric_limits<double>::infinity(), x);
+        if (d < best) {
+          best = d;
+          best_x = x;
+          best_radius = probe.kind == FieldProbe::Kind::kPoints ? 0.0 : probe.radius;
+        }
+      }
+      if (!(best <= max_distance || best < 0.0)) continue;
+      Vec3 n_O;
+      const double core = field->Distance(best_x, &n_O);  // n_O: outward normal of the object
+      ContactPair pair;
+      pair.link = static_cast<int>(l);
+      pair.piece = -1;
+      pair.distance = best;
+      pair.c_o_P = T_PO * Vec3(best_x - core * n_O);
+      pair.c_f_P = T_PO * Vec3(best_x - best_radius * n_O);
+      pair.normal_P = T_PO.linear() * (-n_O);
+      out.push_back(pair);
+    }
+  }
+
   void Run(const std::vector<Transform>& T_PL, const Transform& T_PO, double max_distance,
            bool broad_phase, std::vector<ContactPair>& out) {
     INHAND_CHECK(T_PL.size() == link_shapes.size(), "link poses do not match the hand model");
     out.clear();
+    if (field) {
+      RunField(T_PL, T_PO, max_distance, broad_phase, out);
+      return;
+    }
     for (std::size_t l = 0; l < link_shapes.size(); ++l) {
       ContactPair best;
       best.distance = std::numeric_limits<double>::infinity();
@@ -148,6 +320,12 @@ BulletContactQuery::BulletContactQuery(const HandModel& hand, const ObjectModel&
   for (std::size_t l = 0; l < hand.links.size(); ++l)
     for (const ConvexPiece& p : hand.links[l].collision) impl_->link_shapes[l].push_back(MakeShape(p));
   for (const ConvexPiece& p : object.pieces) impl_->object_shapes.push_back(MakeShape(p));
+  if (object.field && !object.field->empty()) {
+    impl_->field = object.field;
+    impl_->link_probes.resize(hand.links.size());
+    for (std::size_t l = 0; l < hand.links.size(); ++l)
+      for (const ConvexPiece& p : hand.links[l].collision) impl_->link_probes[l].push_back(MakeProbe(p));
+  }
 }
 
 BulletContactQuery::~BulletContactQuery() = default;

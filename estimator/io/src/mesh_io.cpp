@@ -201,14 +201,18 @@ std::vector<ConvexPiece> ComponentHulls(const std::vector<TriangleMesh>& meshes,
 
 namespace {
 
-std::string CacheDir(const HacdParams& params) {
-  if (!params.cache_dir.empty()) return params.cache_dir;
+}  // namespace
+
+std::string CacheDirectory(const std::string& override_dir) {
+  if (!override_dir.empty()) return override_dir;
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
     return (fs::path(xdg) / "inhand").string();
   if (const char* home = std::getenv("HOME"); home && *home)
     return (fs::path(home) / ".cache" / "inhand").string();
   return (fs::temp_directory_path() / "inhand-cache").string();
 }
+
+namespace {
 
 // FNV-1a over the mesh and the parameters: the cache key.
 std::uint64_t HashMesh(const TriangleMesh& mesh, const HacdParams& params) {
@@ -273,7 +277,7 @@ std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParam
   if (params.min_pieces < 1 || params.vertices_per_piece < 4 || !(params.concavity > 0.0))
     throw InputError(source + ": HACD parameters need min_pieces >= 1, vertices_per_piece >= 4, "
                      "concavity > 0");
-  const fs::path dir = CacheDir(params);
+  const fs::path dir = CacheDirectory(params.cache_dir);
   std::ostringstream name;
   name << "hacd-" << std::hex << std::setw(16) << std::setfill('0') << HashMesh(mesh, params)
        << ".obj";

@@ -38,7 +38,8 @@ void PiecesFromMesh(const std::vector<TriangleMesh>& meshes, const std::string& 
   }
 }
 
-ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages) {
+ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
+                           const ContactFieldOptions* field_override) {
   const jsonf::Json doc = jsonf::ReadFile(path);
   const jsonf::Field root{doc, path, ""};
   if (root.Has("format") && root["format"].String() != "inhand-object")
@@ -165,13 +166,24 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages) 
       obj.tags.push_back(tag);
     }
   }
+
+  ContactFieldOptions field;
+  if (root.Has("contact_field")) {
+    const jsonf::Field c = root["contact_field"];
+    if (c.Has("source")) field.source = c["source"].String();
+    if (c.Has("spacing")) field.params.spacing = c["spacing"].PositiveNumber();
+    if (c.Has("padding")) field.params.padding = c["padding"].NonNegativeNumber();
+    field.Validate(c.Where());
+  }
+  AttachContactField(obj, field_override ? *field_override : field, path);
   return obj;
 }
 
 }  // namespace
 
 // A single-link URDF (YCB style): the root link's geometry and <inertial>.
-ObjectModel LoadObjectUrdf(const std::string& path, const PackageMap& packages) {
+ObjectModel LoadObjectUrdf(const std::string& path, const PackageMap& packages,
+                           const ContactFieldOptions& field) {
   HandLoadOptions options;
   options.packages = packages;
   options.collision_mesh_components = true;
@@ -194,16 +206,30 @@ ObjectModel LoadObjectUrdf(const std::string& path, const PackageMap& packages) 
     obj.com_O = mp.com;
     obj.inertia_com = mp.inertia_com * (obj.mass / mp.volume);
   }
+  AttachContactField(obj, field, path);
   return obj;
 }
 
-ObjectModel LoadObjectModel(const std::string& path, const PackageMap& packages) {
+namespace {
+
+ObjectModel Load(const std::string& path, const PackageMap& packages, const ContactFieldOptions* field) {
   if (!fs::is_regular_file(path)) throw InputError(path + ": object description not found");
   const std::string ext = fs::path(path).extension().string();
-  if (ext == ".json") return LoadObjectJson(path, packages);
-  if (ext == ".urdf") return LoadObjectUrdf(path, packages);
+  if (ext == ".json") return LoadObjectJson(path, packages, field);
+  if (ext == ".urdf") return LoadObjectUrdf(path, packages, field ? *field : ContactFieldOptions{});
   throw InputError(path + ": unknown object description format '" + ext +
                    "', expected .json (inhand object) or .urdf (single link)");
+}
+
+}  // namespace
+
+ObjectModel LoadObjectModel(const std::string& path, const PackageMap& packages) {
+  return Load(path, packages, nullptr);
+}
+
+ObjectModel LoadObjectModel(const std::string& path, const PackageMap& packages,
+                            const ContactFieldOptions& field) {
+  return Load(path, packages, &field);
 }
 
 }  // namespace inhand

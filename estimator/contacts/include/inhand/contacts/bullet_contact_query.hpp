@@ -4,6 +4,13 @@
 // Exact shapes: spheres and capsules natively, boxes and hulls as convex hulls with a small
 // margin that is subtracted again (dependencies.md: EPA is unreliable on coplanar faces
 // without margin), cylinders natively with a 0.1 mm rounding of their rims.
+//
+// An object with a distance field (ObjectModel::field: a scan's closed surface or the union of
+// many pieces) is queried against the field instead: a link piece's depth is how far it is inside
+// the object as a whole, not inside one fragment. Link spheres and capsules are exact through
+// their centre / segment; boxes and hulls through surface samples 1.5 mm apart (on a surface
+// curved with radius R the missed depth between samples is below (0.75 mm)^2 / 2R). The pair's
+// piece is then -1 and its normal is the field's gradient.
 #include <memory>
 
 #include "inhand/core/contact.hpp"

@@ -53,6 +53,10 @@ struct HacdParams {
 std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParams& params,
                                        const std::string& source);
 
+// The folder of inhand's caches: `override` if set, else $XDG_CACHE_HOME/inhand, ~/.cache/inhand
+// or the temporary folder's inhand-cache.
+std::string CacheDirectory(const std::string& override_dir = "");
+
 // Writes pieces as one OBJ with an object per piece (readable back with "components").
 void WritePiecesObj(const std::vector<ConvexPiece>& pieces, const std::string& path);
 
