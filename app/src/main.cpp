@@ -14,9 +14,10 @@ int main(int argc, char** argv) {
 
   inhand::app::ModelCommand model;
   auto* model_cmd = cli.add_subcommand("model", "Load a hand URDF or an object description and summarise it");
-  model_cmd->add_option("FILE", model.file, "hand URDF or object .json")->required();
+  model_cmd->add_option("FILE", model.file, "hand URDF, object .json or single-link object URDF")->required();
   model_cmd->add_option("--package", model.packages, "resolve package://NAME as DIR (NAME=DIR)");
   model_cmd->add_flag("--json", model.json, "print JSON");
+  model_cmd->add_flag("--object", model.object, "load FILE as an object (a single-link URDF without joints is one anyway)");
   model_cmd->add_option("--render", model.render, "write a PNG preview (three views)");
 
   inhand::app::CompareCommand compare;

@@ -1,8 +1,12 @@
+#include <array>
+#include <cmath>
 #include <filesystem>
+#include <limits>
 #include <iomanip>
 #include <iostream>
 #include <functional>
 #include <map>
+#include <optional>
 
 #include "inhand/app/commands.hpp"
 #include "inhand/io/detail/json_fields.hpp"
@@ -118,12 +122,45 @@ int PrintHand(const HandModel& hand, bool as_json) {
   return 0;
 }
 
+// What `inhand model` says of an object's pieces, beside its visual mesh.
+struct PieceSummary {
+  double smallest = 0.0, largest = 0.0;  // [m] longest bounding-box edge of a piece
+  double pieces_volume = 0.0;            // [m³] sum over pieces (overlaps counted twice)
+  double mesh_volume = 0.0;              // [m³] of the visual meshes when they are closed, else 0
+  bool mesh_closed = false;
+};
+
+PieceSummary SummarisePieces(const ObjectModel& obj) {
+  PieceSummary s;
+  s.smallest = std::numeric_limits<double>::infinity();
+  for (const ConvexPiece& p : obj.pieces) {
+    const TriangleMesh m = p.ToMesh();
+    const double extent = m.Bounds().Size().maxCoeff();
+    s.smallest = std::min(s.smallest, extent);
+    s.largest = std::max(s.largest, extent);
+    s.pieces_volume += ComputeMassProperties({&m}).volume;
+  }
+  std::vector<const TriangleMesh*> visual;
+  for (const TriangleMesh& m : obj.visual) visual.push_back(&m);
+  s.mesh_closed = IsWatertightForParity(visual);
+  if (s.mesh_closed) s.mesh_volume = ComputeMassProperties(visual).volume;
+  return s;
+}
+
 int PrintObject(const ObjectModel& obj, bool as_json) {
   const Aabb box = obj.Bounds();
+  const PieceSummary ps = SummarisePieces(obj);
+  const DistanceField* field = obj.field.get();
   if (as_json) {
     Json tags = Json::array();
     for (const TagPlacement& t : obj.tags)
       tags.push_back({{"family", t.family}, {"id", t.id}, {"size", t.size}, {"pose", jsonf::PoseToJson(t.T_OT)}});
+    Json field_json = nullptr;
+    if (field)
+      field_json = {{"source", field->source},
+                    {"spacing", field->spacing},
+                    {"dims", {field->dims[0], field->dims[1], field->dims[2]}},
+                    {"cache_file", obj.field_cache}};
     Json out = {{"kind", "object"},
                 {"name", obj.name},
                 {"source", obj.source},
@@ -132,9 +169,14 @@ int PrintObject(const ObjectModel& obj, bool as_json) {
                 {"inertia_diagonal", {obj.inertia_com(0, 0), obj.inertia_com(1, 1), obj.inertia_com(2, 2)}},
                 {"size", {box.Size().x(), box.Size().y(), box.Size().z()}},
                 {"pieces", obj.pieces.size()},
+                {"piece_size_range", {ps.smallest, ps.largest}},
+                {"pieces_volume", ps.pieces_volume},
+                {"mesh_volume", ps.mesh_closed ? Json(ps.mesh_volume) : Json(nullptr)},
                 {"piece_list", PiecesJson(obj.pieces)},
                 {"decomposition", obj.decomposition},
+                {"contact_field", field_json},
                 {"triangles", obj.NumVisualTriangles()},
+                {"mesh_files", obj.mesh_files},
                 {"tags", tags}};
     std::cout << out.dump(2) << "\n";
     return 0;
@@ -145,35 +187,78 @@ int PrintObject(const ObjectModel& obj, bool as_json) {
   std::cout << "object '" << obj.name << "' from " << obj.source << "\n"
             << std::fixed << std::setprecision(1) << "size " << size.x() << " x " << size.y()
             << " x " << size.z() << " mm, mass " << std::setprecision(3) << obj.mass << " kg\n"
-            << obj.NumVisualTriangles() << " visual triangles, " << obj.pieces.size()
-            << " convex pieces (" << KindsSummary(pieces) << "; " << obj.decomposition << ")\n"
-            << obj.tags.size() << " AprilTags";
+            << obj.NumVisualTriangles() << " visual triangles ("
+            << (ps.mesh_closed ? "closed" : "not closed: no volume") << ")\n"
+            << obj.pieces.size() << " convex pieces (" << KindsSummary(pieces) << "), from "
+            << obj.decomposition << "\n"
+            << std::setprecision(1) << "  piece size " << ps.smallest * 1e3 << " .. " << ps.largest * 1e3
+            << " mm; volume " << ps.pieces_volume * 1e6 << " cm3";
+  if (ps.mesh_closed)
+    std::cout << " against the mesh's " << ps.mesh_volume * 1e6 << " cm3 (" << std::setprecision(0)
+              << 100.0 * ps.pieces_volume / ps.mesh_volume << " %)";
+  std::cout << "\ncontacts: ";
+  if (field)
+    std::cout << "signed distance field of the " << field->source << ", " << std::setprecision(2)
+              << field->spacing * 1e3 << " mm grid " << field->dims[0] << " x " << field->dims[1] << " x "
+              << field->dims[2] << "\n  cache " << obj.field_cache;
+  else
+    std::cout << "GJK against each piece";
+  std::cout << "\n" << obj.tags.size() << " AprilTags";
   for (const TagPlacement& t : obj.tags)
-    std::cout << "\n  " << t.family << " id " << t.id << ", " << t.size * 1000.0 << " mm";
-  std::cout << std::defaultfloat << "\n";
+    std::cout << "\n  " << t.family << " id " << t.id << ", " << std::setprecision(1) << t.size * 1000.0 << " mm";
+  std::cout << std::defaultfloat << "\n" << obj.mesh_files.size() << " mesh files:\n";
+  for (const std::string& f : obj.mesh_files) std::cout << "  " << f << "\n";
   return 0;
 }
 
+// The pieces as an object of their own, each piece in its own colour (golden-angle hues).
+ObjectModel PiecesAsObject(const ObjectModel& obj) {
+  ObjectModel out;
+  out.name = obj.name + " pieces";
+  for (std::size_t i = 0; i < obj.pieces.size(); ++i) {
+    TriangleMesh m = obj.pieces[i].ToMesh();
+    const double hue = std::fmod(i * 0.618033988749895, 1.0) * 6.0;
+    const double x = 1.0 - std::abs(std::fmod(hue, 2.0) - 1.0);
+    const int sector = static_cast<int>(hue);
+    const double rgb[6][3] = {{1, x, 0}, {x, 1, 0}, {0, 1, x}, {0, x, 1}, {x, 0, 1}, {1, 0, x}};
+    for (int c = 0; c < 3; ++c) m.material.rgba[c] = 0.25 + 0.7 * rgb[sector % 6][c];
+    m.material.rgba[3] = 1.0;
+    out.visual.push_back(std::move(m));
+  }
+  return out;
+}
+
 // Three views around the model's bounding box, side by side, with captions.
-void RenderPreview(const std::string& path, const std::string& title,
-                   const std::function<void(Renderer&, Scene&)>& populate, const Aabb& box) {
+void RenderPreview(const std::string& path, const std::array<std::string, 3>& titles,
+                   const std::function<void(Renderer&, Scene&, int view)>& populate, const Aabb& box) {
   Renderer renderer;
-  Scene scene;
-  scene.K = IntrinsicsFromFov(480, 480, 40.0);
-  scene.background = Vec3(0.86, 0.88, 0.91);
-  populate(renderer, scene);
   const double radius = std::max(0.5 * box.Size().norm(), 0.02);
   const double distance = 1.15 * radius / std::sin(20.0 * M_PI / 180.0);
   std::vector<Image8> views;
   const std::vector<std::pair<double, double>> angles = {{-0.5 * M_PI, 0.35}, {0.0, 0.35}, {0.6, 1.2}};
   for (const auto& [azimuth, elevation] : angles) {
+    Scene scene;
+    scene.K = IntrinsicsFromFov(480, 480, 40.0);
+    scene.background = Vec3(0.86, 0.88, 0.91);
+    populate(renderer, scene, static_cast<int>(views.size()));
     scene.T_PC = OrbitCamera(box.Center(), distance, azimuth, elevation);
     RenderOutput out;
     renderer.Render(scene, out, false);
     views.push_back(out.colour);
   }
-  const Image8 all = SideBySide({&views[0], &views[1], &views[2]}, {title, "side", "above"});
+  const Image8 all = SideBySide({&views[0], &views[1], &views[2]}, {titles[0], titles[1], titles[2]});
   WriteImage(path, all);
+}
+
+// An object when asked, when the file is an object JSON, or when a URDF has a single link and no
+// joints (how YCB and most object datasets ship their models).
+bool IsObjectFile(const ModelCommand& cmd, const PackageMap& packages) {
+  if (cmd.object || std::filesystem::path(cmd.file).extension() == ".json") return true;
+  HandLoadOptions probe;
+  probe.packages = packages;
+  probe.load_visual_meshes = false;
+  const HandModel hand = LoadHandModel(cmd.file, probe);
+  return hand.links.size() == 1 && hand.joints.empty();
 }
 
 }  // namespace
@@ -181,13 +266,18 @@ void RenderPreview(const std::string& path, const std::string& title,
 int RunModel(const ModelCommand& cmd) {
   PackageMap packages;
   for (const std::string& spec : cmd.packages) packages.AddSpec(spec);
-  if (std::filesystem::path(cmd.file).extension() == ".json") {
+  if (IsObjectFile(cmd, packages)) {
     const ObjectModel object = LoadObjectModel(cmd.file, packages);
     const int code = PrintObject(object, cmd.json);
-    if (!cmd.render.empty())
-      RenderPreview(cmd.render, object.name,
-                    [&](Renderer& r, Scene& s) { AddObject(s, UploadObject(r, object), Transform::Identity()); },
+    if (!cmd.render.empty()) {
+      // The object as it looks, then its pieces in distinct colours from the side and above.
+      const ObjectModel pieces = PiecesAsObject(object);
+      RenderPreview(cmd.render, {object.name, std::to_string(object.pieces.size()) + " pieces, side", "pieces, above"},
+                    [&](Renderer& r, Scene& s, int view) {
+                      AddObject(s, UploadObject(r, view == 0 ? object : pieces), Transform::Identity());
+                    },
                     object.Bounds());
+    }
     return code;
   }
   HandLoadOptions options;
@@ -208,8 +298,13 @@ int RunModel(const ModelCommand& cmd) {
     for (std::size_t l = 0; l < hand.links.size(); ++l)
       for (const TriangleMesh& m : hand.links[l].visual)
         for (const Vec3& v : m.vertices) box.Extend(kin.T_PL(static_cast<int>(l)) * v);
-    RenderPreview(cmd.render, hand.name,
-                  [&](Renderer& r, Scene& s) { AddHand(s, UploadHand(r, hand), kin.link_poses()); }, box);
+    std::optional<HandMeshes> meshes;
+    RenderPreview(cmd.render, {hand.name, "side", "above"},
+                  [&](Renderer& r, Scene& s, int) {
+                    if (!meshes) meshes = UploadHand(r, hand);
+                    AddHand(s, *meshes, kin.link_poses());
+                  },
+                  box);
   }
   return code;
 }

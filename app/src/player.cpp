@@ -61,7 +61,9 @@ bool SessionPlayer::TruthCovers(double t) const {
 
 std::vector<std::string> SessionPlayer::InputReport::Warnings(const Session& session, const SessionModels& models,
                                                               const TrackerParams& params) const {
-  std::vector<std::string> out;
+  std::vector<std::string> out = session.LimitWarnings(models.hand, models.joint_columns);
+  for (std::string& line : out)
+    line += params.joint_clamp_to_limits ? "; clamped to the limit" : "; kept as measured (joints.clamp_to_limits to clamp)";
   const std::vector<std::string> names = models.hand.QNames();
   for (std::size_t i = 0; i < rejected_samples.size() && i < 5; ++i) {
     const Rejected& r = rejected_samples[i];

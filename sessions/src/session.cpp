@@ -357,6 +357,46 @@ std::vector<int> Session::JointColumns(const HandModel& hand) const {
   return column;
 }
 
+std::vector<Session::LimitViolation> Session::LimitViolations(const HandModel& hand, const std::vector<int>& columns) const {
+  std::vector<LimitViolation> out;
+  for (int i = 0; i < hand.num_q(); ++i) {
+    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    if (!joint.has_limits) continue;
+    LimitViolation v;
+    v.q_index = i;
+    v.joint = joint.name;
+    double worst_by = 0.0;
+    const auto column = q_.col(columns[static_cast<std::size_t>(i)]);
+    for (Eigen::Index k = 0; k < column.size(); ++k) {
+      const double x = column[k];
+      if (!std::isfinite(x)) continue;  // the player reports those
+      const double by = x < joint.lower ? joint.lower - x : (x > joint.upper ? x - joint.upper : 0.0);
+      if (!(by > 0.0)) continue;
+      ++(x < joint.lower ? v.below : v.above);
+      if (by > worst_by) {
+        worst_by = by;
+        v.worst = x;
+        v.limit = x < joint.lower ? joint.lower : joint.upper;
+      }
+    }
+    if (v.below + v.above > 0) out.push_back(v);
+  }
+  return out;
+}
+
+std::vector<std::string> Session::LimitWarnings(const HandModel& hand, const std::vector<int>& columns) const {
+  std::vector<std::string> out;
+  for (const LimitViolation& v : LimitViolations(hand, columns)) {
+    std::ostringstream line;
+    line << Resolve("joints.csv") << ": q:" << v.joint << " beyond its ";
+    if (v.below > 0 && v.above > 0) line << "limits in " << v.below << " (below) and " << v.above << " (above)";
+    else line << (v.below > 0 ? "lower" : "upper") << " limit " << v.limit << " in " << v.below + v.above;
+    line << " of " << num_samples() << " samples (worst " << v.worst << ", by " << std::abs(v.worst - v.limit) << ")";
+    out.push_back(line.str());
+  }
+  return out;
+}
+
 SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes) {
   PackageMap packages;
   for (const auto& [name, d] : session.info().packages) {

@@ -89,6 +89,8 @@ struct Tracker::Impl {
     }
   }
 
+  Eigen::VectorXd q_used;  // the sample as fused (clamped to the limits when asked)
+
   Slot& At(long k) { return ring[static_cast<std::size_t>(k % static_cast<long>(ring.size()))]; }
 
   // --- the caller's side
@@ -113,13 +115,16 @@ struct Tracker::Impl {
       if (started) Submit(std::move(job));
       else DropLate();
     }
+    if (q_used.size() != q.size()) q_used.resize(q.size());  // once
+    q_used = q;
+    if (params.joint_clamp_to_limits) ClampToLimits(hand, q_used);
     const double dt = started ? t - last_t : 0.0;
     if (!started) {
-      filter.Reset(start_T_PO, q, start_sigmas);
+      filter.Reset(start_T_PO, q_used, start_sigmas);
       started = true;
       PreallocateRing();
     }
-    filter.Predict(q, dt);
+    filter.Predict(q_used, dt);
     filter.UpdateContacts(tau);
     {
       std::lock_guard<std::mutex> lock(mutex);
@@ -128,7 +133,7 @@ struct Tracker::Impl {
       Slot& s = At(k);
       s.t = t;
       s.dt = dt;
-      s.q = q;
+      s.q = q_used;
       s.tau = tau;
       s.after_sample = filter.state();
       s.fused.clear();

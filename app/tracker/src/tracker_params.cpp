@@ -1,5 +1,6 @@
 #include "inhand/tracker/tracker_params.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -114,7 +115,7 @@ std::string TrackerParamsToJson(const TrackerParams& params) {
   tags["fine_search"] = params.tag_fine_search;
   j["tags"] = tags;
   j["features"] = Write(params.features, FeatureFields());
-  j["joints"] = {{"limit_margin", params.joint_limit_margin}};
+  j["joints"] = {{"limit_margin", params.joint_limit_margin}, {"clamp_to_limits", params.joint_clamp_to_limits}};
   return j.dump(2);
 }
 
@@ -146,6 +147,11 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
     const Json& joints = j["joints"];
     if (!joints.is_object()) throw InputError(source + ": 'joints' must be an object");
     for (auto it = joints.begin(); it != joints.end(); ++it) {
+      if (it.key() == "clamp_to_limits") {
+        if (!it.value().is_boolean()) throw InputError(source + ": parameter 'joints.clamp_to_limits' must be true or false");
+        p.joint_clamp_to_limits = it.value().get<bool>();
+        continue;
+      }
       if (it.key() != "limit_margin") throw InputError(source + " (joints): unknown parameter '" + it.key() + "'");
       if (!it.value().is_number()) throw InputError(source + ": parameter 'joints.limit_margin' must be a number");
       p.joint_limit_margin = it.value().get<double>();
@@ -155,6 +161,13 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
   p.filter = FilterParamsFromJson(j.dump(), source);
   p.Validate(source);
   return p;
+}
+
+void ClampToLimits(const HandModel& hand, Eigen::Ref<Eigen::VectorXd> q) {
+  for (int i = 0; i < hand.num_q(); ++i) {
+    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    if (joint.has_limits) q[i] = std::clamp(q[i], joint.lower, joint.upper);
+  }
 }
 
 RejectedJoint ScreenJointSample(const HandModel& hand, const TrackerParams& params, const Eigen::Ref<const Eigen::VectorXd>& q,

@@ -266,6 +266,27 @@ struct BulletContactQuery::Impl {
       if (!(best <= max_distance || best < 0.0)) continue;
       Vec3 n_O;
       const double core = field->Distance(best_x, &n_O);  // n_O: outward normal of the object
+      if (best < 0.0) {
+        // A box or hull in the object: the normal is the depth-weighted mean of the field's
+        // gradient over every surface sample inside (the direction that pushes the penetrating
+        // patch out as a whole). The deepest sample's own gradient alone turns sideways where the
+        // link reaches the object's medial axis (a palm across a marker 9 mm thick).
+        Vec3 sum = Vec3::Zero();
+        for (const FieldProbe& probe : link_probes[l]) {
+          if (probe.kind != FieldProbe::Kind::kPoints) continue;
+          if (field->Distance(T_OL * probe.center_B) - probe.bound > 0.0) continue;
+          for (const FieldProbe::Patch& patch : probe.patches) {
+            if (field->Distance(T_OL * patch.center_B) - patch.radius > 0.0) continue;
+            for (int i = patch.first; i < patch.first + patch.count; ++i) {
+              const Vec3 x = T_OL * probe.points_B[static_cast<std::size_t>(i)];
+              Vec3 g;
+              const double d = field->Distance(x, &g);
+              if (d < 0.0) sum -= d * g;
+            }
+          }
+        }
+        if (sum.norm() > 1e-12 && best_radius == 0.0) n_O = sum.normalized();
+      }
       ContactPair pair;
       pair.link = static_cast<int>(l);
       pair.piece = -1;

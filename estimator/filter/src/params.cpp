@@ -29,6 +29,7 @@ const std::vector<Field>& Fields() {
       {"contact_sigma", &FilterParams::contact_sigma, nullptr, nullptr, 1e-5, 1.0, false, "in [1e-5, 1] m"},
       {"contact_normal_only", nullptr, nullptr, &FilterParams::contact_normal_only, 0, 0, false, "true or false"},
       {"contact_iterations", nullptr, &FilterParams::contact_iterations, nullptr, 1, 20, false, "an integer in [1, 20]"},
+      {"contact_model_sigma", &FilterParams::contact_model_sigma, nullptr, nullptr, 0.0, 1.0, false, "in [0, 1] m (0 disables)"},
       {"contact_gate_chi2", &FilterParams::contact_gate_chi2, nullptr, nullptr, 0.0, 1e9, false, ">= 0 (0 disables)"},
       {"prediction_contact_distance", &FilterParams::prediction_contact_distance, nullptr, nullptr, 0.0, 0.1, false, "in [0, 0.1] m"},
       {"torque_candidate_distance", &FilterParams::torque_candidate_distance, nullptr, nullptr, 0.0, 0.2, false, "in [0, 0.2] m"},

@@ -1,5 +1,6 @@
 #include "inhand/io/object_loader.hpp"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "inhand/core/error.hpp"
@@ -55,6 +56,7 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
   for (std::size_t i = 0; i < visual.Size(); ++i) {
     const jsonf::Field v = visual.At(i);
     const std::string file = ResolveResource(v["mesh"].String(), path, packages);
+    if (std::find(obj.mesh_files.begin(), obj.mesh_files.end(), file) == obj.mesh_files.end()) obj.mesh_files.push_back(file);
     const Vec3 scale = v.Has("scale") ? v["scale"].Vector3() : Vec3::Ones();
     const Transform T = v.Has("pose") ? v["pose"].Pose() : Transform::Identity();
     for (TriangleMesh mesh : cache.Get(file, scale)) {
@@ -88,6 +90,7 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
     const std::string where = c.Where();
     if (c.Has("mesh")) {
       const std::string file = ResolveResource(c["mesh"].String(), path, packages);
+      if (std::find(obj.mesh_files.begin(), obj.mesh_files.end(), file) == obj.mesh_files.end()) obj.mesh_files.push_back(file);
       const std::string method = c.Has("method") ? c["method"].String() : "components";
       std::vector<TriangleMesh> meshes = cache.Get(
           file, c.Has("scale") ? c["scale"].Vector3() : Vec3::Ones(), MeshGrouping::kByPart);
@@ -192,6 +195,7 @@ ObjectModel LoadObjectUrdf(const std::string& path, const PackageMap& packages,
   ObjectModel obj;
   obj.name = as_hand.name;
   obj.source = path;
+  obj.mesh_files = as_hand.mesh_files;
   obj.visual = link.visual;
   obj.decomposition = "URDF collision elements";
   obj.pieces = link.collision;

@@ -9,9 +9,11 @@
 namespace inhand::app {
 
 struct ModelCommand {
-  std::string file;                   // a hand URDF, or an object description (.json)
+  std::string file;                   // a hand URDF, or an object description (.json, or a
+                                      // single-link URDF without joints: a YCB object)
   std::vector<std::string> packages;  // NAME=DIR
   bool json = false;
+  bool object = false;                // load FILE as an object even if it could be a hand
   std::string render;                 // PNG preview of the hand (or object), "" for none
 };
 int RunModel(const ModelCommand& cmd);

@@ -75,6 +75,21 @@ class Session {
   // joint of the hand has no column. The session itself stays as it was read.
   std::vector<int> JointColumns(const HandModel& hand) const;
 
+  // Joint samples beyond the URDF's limits, one entry per joint that has any (configuration
+  // order): how many below / above, the worst value and the limit it passes. Real hands' encoders
+  // overshoot their URDFs (19 of 20 recorded Allegro grasps pass joint_12.0's upper limit).
+  struct LimitViolation {
+    int q_index = -1;
+    std::string joint;
+    long below = 0, above = 0;  // samples
+    double worst = 0.0;         // the sample farthest beyond its limit
+    double limit = 0.0;         // the limit it passes
+  };
+  std::vector<LimitViolation> LimitViolations(const HandModel& hand, const std::vector<int>& columns) const;
+  // One warning line per such joint: "DIR/joints.csv: q:NAME beyond its upper limit L in N of M
+  // samples (worst W, by D)".
+  std::vector<std::string> LimitWarnings(const HandModel& hand, const std::vector<int>& columns) const;
+
  private:
   std::string dir_;
   SessionInfo info_;

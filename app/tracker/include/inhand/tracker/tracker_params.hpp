@@ -24,6 +24,11 @@ struct TrackerParams {
   // beyond ±1000). A real hand's encoders overshoot their URDF limits a little (the Allegro's
   // thumb by ~0.1 rad); a corrupt sample is off by far more. JSON: "joints": {"limit_margin"}.
   double joint_limit_margin = 0.5;
+  // Samples within the margin but beyond the limits: kept as measured (false), or clamped to the
+  // limits before they are fused (true: when the URDF's limits are right and the encoders
+  // overshoot). JSON: "joints": {"clamp_to_limits"}. The player reports them either way, once per
+  // joint (SessionPlayer::InputReport).
+  bool joint_clamp_to_limits = false;
 
   // Throws InputError("SOURCE: parameter '...' is ..., expected ...").
   void Validate(const std::string& source = "tracker parameters") const;
@@ -36,6 +41,9 @@ TrackerParams ReadTrackerParams(const std::string& path);
 
 // The first joint (configuration index) whose sample must not be fused under `params`, or -1.
 // `torque` tells whether it is the torque (not a number) rather than the position.
+// Clamps every joint with limits into them.
+void ClampToLimits(const HandModel& hand, Eigen::Ref<Eigen::VectorXd> q);
+
 struct RejectedJoint {
   int joint = -1;
   bool torque = false;

@@ -25,6 +25,7 @@ struct TagPlacement {
 struct ObjectModel {
   std::string name;
   std::string source;                    // description file
+  std::vector<std::string> mesh_files;   // every mesh file it uses, resolved, first use first
   std::vector<TriangleMesh> visual;      // object frame O
   std::vector<ConvexPiece> pieces;       // object frame O, for contacts
   std::string decomposition;             // how pieces were obtained (for reports)
