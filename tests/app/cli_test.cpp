@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <unistd.h>
 
 #include <cmath>
@@ -66,6 +68,43 @@ TEST(Cli, ModelOnObjects) {
   EXPECT_EQ(j.at("name"), "brush");
   EXPECT_EQ(j.at("pieces"), 3);
   EXPECT_EQ(j.at("tags").size(), 1u);
+}
+
+// A single-link URDF without joints (how YCB ships its objects) is an object: its pieces, their
+// sizes and volume against the scan's, the contact field and its cache file; --render colours
+// the pieces.
+TEST(Cli, ModelRecognisesAYcbObject) {
+  INHAND_REQUIRE_SHARED_ASSETS();
+  test::TempDir dir;
+  const std::string urdf = test::SharedAssets() + "/objects/ycb/mustard_bottle.urdf";
+  const test::CommandResult r = test::RunInhand("model " + urdf + " --json --render " + (dir / "mustard.png"), "XDG_CACHE_HOME=" + dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Json j = Json::parse(r.output.substr(0, r.output.rfind('}') + 1));
+  EXPECT_EQ(j.at("kind"), "object");
+  EXPECT_GT(j.at("pieces").get<int>(), 20);
+  EXPECT_LT(j.at("piece_size_range")[0].get<double>(), j.at("piece_size_range")[1].get<double>());
+  const double ratio = j.at("pieces_volume").get<double>() / j.at("mesh_volume").get<double>();
+  EXPECT_GT(ratio, 0.8);
+  EXPECT_LT(ratio, 1.2);
+  EXPECT_NE(j.at("decomposition").get<std::string>().find("components of textured_vhacd.stl"), std::string::npos);
+  EXPECT_NE(j.at("contact_field").at("source").get<std::string>().find("closed mesh"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(j.at("contact_field").at("cache_file").get<std::string>()));
+  EXPECT_EQ(j.at("contact_field").at("cache_file").get<std::string>().rfind(dir.path(), 0), 0u);
+  EXPECT_EQ(j.at("mesh_files").size(), 2u);
+  // The pieces' view is colourful: many distinct saturated colours.
+  const Image8 img = ReadImage(dir / "mustard.png");
+  std::set<int> hues;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 480; x < 960; ++x) {
+      const auto p = img.pixel(x, y);
+      const int mx = std::max({p[0], p[1], p[2]}), mn = std::min({p[0], p[1], p[2]});
+      if (mx - mn > 80) hues.insert((p[0] / 32) * 64 + (p[1] / 32) * 8 + p[2] / 32);
+    }
+  EXPECT_GT(hues.size(), 12u);
+  // The text form says the same; --object on a hand URDF makes it one link's object.
+  const test::CommandResult text = test::RunInhand("model " + urdf, "XDG_CACHE_HOME=" + dir.path());
+  EXPECT_NE(text.output.find("object 'mustard_bottle'"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("signed distance field"), std::string::npos) << text.output;
 }
 
 TEST(Cli, BadInputExitsNonZeroWithOneClearLine) {

@@ -144,6 +144,50 @@ TEST(Robustness, AnAbsurdJointSampleIsDroppedAndReported) {
   }
 }
 
+// Encoders overshoot their URDF's limits (19 of 20 recorded Allegro grasps pass joint_12.0's
+// upper limit): such samples are reported once per joint with the worst value and the limit, and
+// kept or clamped as joints.clamp_to_limits says.
+TEST(Robustness, JointSamplesBeyondTheirLimitsAreReportedOncePerJoint) {
+  test::TempDir dir;
+  fs::copy(Session(), dir / "s", fs::copy_options::recursive);
+  std::stringstream in(Read(dir / "s/joints.csv"));
+  std::string out, line;
+  // Column 3 is q:index_flex2 (limits [0, 1.75]), column 1 q:index_abduction ([-0.35, 0.35]).
+  auto set = [](std::string& row, int column, const std::string& value) {
+    std::size_t start = 0;
+    for (int c = 0; c < column; ++c) start = row.find(',', start) + 1;
+    const std::size_t end = row.find(',', start);
+    row = row.substr(0, start) + value + (end == std::string::npos ? "" : row.substr(end));
+  };
+  for (int k = -1; std::getline(in, line); ++k) {
+    if (k >= 100 && k < 111) set(line, 3, k == 105 ? "1.85" : "1.8");
+    if (k == 200) set(line, 1, "-0.4");
+    out += line + "\n";
+  }
+  std::ofstream(dir / "s/joints.csv") << out;
+  const test::CommandResult kept = test::RunInhand("replay " + (dir / "s") + " --no-video --modalities j --out " + (dir / "kept"));
+  ASSERT_EQ(kept.exit_code, 0) << kept.output;
+  const std::string flex2 = "q:index_flex2 beyond its upper limit 1.75 in 11 of ";
+  EXPECT_NE(kept.output.find(flex2), std::string::npos) << kept.output;
+  EXPECT_NE(kept.output.find("(worst 1.85, by 0.1)"), std::string::npos) << kept.output;
+  EXPECT_EQ(kept.output.find(flex2), kept.output.rfind(flex2)) << "one line per joint";
+  EXPECT_NE(kept.output.find("q:index_abduction beyond its lower limit -0.35 in 1 of "), std::string::npos) << kept.output;
+  EXPECT_NE(kept.output.find("kept as measured"), std::string::npos) << kept.output;
+
+  dir.Write("clamp.json", R"({"joints": {"clamp_to_limits": true}})");
+  const test::CommandResult clamped = test::RunInhand("replay " + (dir / "s") + " --no-video --modalities j --params " +
+                                                      (dir / "clamp.json") + " --out " + (dir / "clamped"));
+  ASSERT_EQ(clamped.exit_code, 0) << clamped.output;
+  EXPECT_NE(clamped.output.find("clamped to the limit"), std::string::npos) << clamped.output;
+  EXPECT_NE(Read(dir / "clamped/params.json").find("\"clamp_to_limits\": true"), std::string::npos);
+  EXPECT_NE(Read(dir / "kept/estimates.csv"), Read(dir / "clamped/estimates.csv"));
+  dir.Write("bad.json", R"({"joints": {"clamp_to_limits": 1}})");
+  const test::CommandResult bad = test::RunInhand("replay " + (dir / "s") + " --no-video --params " + (dir / "bad.json") +
+                                                  " --out " + (dir / "bad"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("'joints.clamp_to_limits' must be true or false"), std::string::npos) << bad.output;
+}
+
 // Parameters at the edge of what they were documented to accept broke the covariance; the
 // ranges now keep the arithmetic finite, and what is outside them is refused by name.
 TEST(Robustness, ParametersThatBreakTheArithmeticAreRefused) {

@@ -49,6 +49,7 @@ Transform At(const Vec3& p) { return MakeTransform(p, Mat3::Identity()); }
 FilterParams PerfectContacts() {
   FilterParams params;
   params.contact_sigma = 0.001;
+  params.contact_model_sigma = 0.0;  // perfect geometry too: no floor on what contacts can know
   return params;
 }
 

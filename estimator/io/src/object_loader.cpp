@@ -197,7 +197,16 @@ ObjectModel LoadObjectUrdf(const std::string& path, const PackageMap& packages,
   obj.source = path;
   obj.mesh_files = as_hand.mesh_files;
   obj.visual = link.visual;
-  obj.decomposition = "URDF collision elements";
+  // "components of textured_vhacd.stl" (a stored decomposition), or the primitives' kinds.
+  std::vector<std::string> parts;
+  for (const ConvexPiece& p : link.collision) {
+    const std::size_t cut = p.source.find(" (component ");
+    const std::string part = cut != std::string::npos ? "components of " + fs::path(p.source.substr(0, cut)).filename().string()
+                                                      : std::string(ConvexPiece::KindName(p.kind));
+    if (std::find(parts.begin(), parts.end(), part) == parts.end()) parts.push_back(part);
+  }
+  for (const std::string& part : parts) obj.decomposition += (obj.decomposition.empty() ? "" : ", ") + part;
+  obj.decomposition += " (URDF collision)";
   obj.pieces = link.collision;
   obj.mass = link.mass;
   if (!(obj.mass > 0.0)) throw InputError(path + ": object link has no <inertial> mass > 0");

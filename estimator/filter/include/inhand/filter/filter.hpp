@@ -168,7 +168,7 @@ class Filter {
   ContactKind ClassifyTorqueContact(std::size_t candidate, FilterTrace::Contact& rec) const;
   bool ApplyContactConstraint(const ContactPair& pair, const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
                               FilterTrace::Contact& rec);
-  void HoldModelVariance();  // contact_model_sigma's floor after a contact constraint (H1_)
+  void CapContactInformation(double var);  // contact_model_sigma, after a normal-only constraint
   double CandidateWeight(double distance) const;
   // inv_weight_[i] = 1 / weight of candidate i relative to its finger's nearest candidate.
   void ComputeCandidateWeights();

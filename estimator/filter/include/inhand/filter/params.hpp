@@ -26,18 +26,20 @@ struct FilterParams {
                                               // NEES in the thousands, tags gated away
   int contact_iterations = 1;                 // 1: one update per step (paper); >1: re-run GJK
                                               // and update again (iterated EKF)
-  double contact_model_sigma = 0.002;         // [m] how well the contact constraints can know
-                                              // the object at all: the hand's and the object's
-                                              // geometry errors, which are the same at every
-                                              // step. A constraint applied at joint rate would
-                                              // otherwise add 1000 independent measurements a
-                                              // second of the same error; after each update the
-                                              // pose's variance along what the constraint
-                                              // measures is held at >= this² (the information a
-                                              // persistent contact can add is capped). With
-                                              // fingers 3 mm too thick the joint-only estimate
-                                              // settled 6.6 mm off with σ 5 mm (NEES 30); see
-                                              // tests/filter/grasp_test.cpp. 0 disables
+  double contact_model_sigma = 0.002;         // [m] how well contact constraints can know the
+                                              // object at all: the hand's and the object's
+                                              // geometry errors, the same at every step. Applied
+                                              // at joint rate, a constraint would otherwise count
+                                              // 1000 independent measurements a second of that
+                                              // one error. The variance along what a constraint
+                                              // measures stays >= this² as far as contacts are
+                                              // concerned: the information an update removes
+                                              // below it is given back (never more than it
+                                              // took, so what tags or the start knew is kept).
+                                              // Fingers 3 mm too thick: the joint-only estimate
+                                              // settled 6.6 mm off claiming σ 5 mm (NEES 30);
+                                              // with 2 mm, NEES 10 (tests/filter/grasp_test.cpp).
+                                              // Normal-only constraints; 0 disables
   double contact_gate_chi2 = 0.0;             // Mahalanobis gate per contact; 0 disables
   double prediction_contact_distance = 0.001; // [m] pairs this close (or penetrating) move the
                                               // object with the fingers in Predict
