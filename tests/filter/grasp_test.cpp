@@ -119,17 +119,19 @@ Grasp CloseAround(const HandModel& hand, BulletContactQuery& query, const Aabb& 
   return g;
 }
 
-// The grasp with the most touching links over placements 0-40 mm beyond the first clear one, the
-// object as given or tipped by 90 degrees about x, turned about z in 45-degree steps.
+// The first grasp with `enough` touching links (else the one with the most) over placements 0-40 mm
+// beyond the first clear one, the object as given or tipped by 90 degrees about x, turned about z
+// in 45-degree steps.
 Grasp BestGrasp(const HandModel& hand, BulletContactQuery& query, const Aabb& object_box, const Mat3& R0,
-                const std::map<std::string, double>& fixed) {
+                const std::map<std::string, double>& fixed, int enough) {
   Grasp best;
   for (int tip = 0; tip < 2; ++tip)
     for (int turn = 0; turn < 4; ++turn)
-      for (double extra = 0.0; extra <= 0.04; extra += 0.01) {
+      for (int extra = 0; extra <= 4; ++extra) {
         const Mat3 R = ExpSO3(Vec3(0, 0, turn * M_PI / 4)) * ExpSO3(Vec3(tip * M_PI / 2, 0, 0)) * R0;
-        const Grasp g = CloseAround(hand, query, object_box, R, fixed, extra);
+        const Grasp g = CloseAround(hand, query, object_box, R, fixed, 0.01 * extra);
         if (g.touching > best.touching) best = g;
+        if (best.touching >= enough) return best;
       }
   return best;
 }
@@ -170,7 +172,7 @@ TEST(Grasp, ContradictoryContactsSettleAndStayConsistent) {
   const HandModel hand = LoadHandModel(root + "hands/inhand_hand/inhand_hand.urdf", options);
   const ObjectModel object = LoadObjectModel(root + "objects/water_bottle/object.json");
   BulletContactQuery truth_query(hand, object);
-  const Grasp g = BestGrasp(hand, truth_query, object.Bounds(), ExpSO3(Vec3(0, M_PI / 2, 0)), {{"thumb_abduction", 1.0}});
+  const Grasp g = BestGrasp(hand, truth_query, object.Bounds(), ExpSO3(Vec3(0, M_PI / 2, 0)), {{"thumb_abduction", 1.0}}, 6);
   ASSERT_GE(g.touching, 3) << "the fingers did not close on the object";
   std::printf("grasp: %s(shift %.3f)\n", g.links.c_str(), g.shift);
 
@@ -224,7 +226,7 @@ TEST(Grasp, AllegroStaticGraspsAroundYcbScans) {
   for (const char* name : {"mustard_bottle", "bleach_cleanser", "large_marker"}) {
     const ObjectModel object = LoadObjectModel(shared + "/objects/ycb/" + name + ".urdf");
     BulletContactQuery query(hand, object);
-    const Grasp g = BestGrasp(hand, query, object.Bounds(), Mat3::Identity(), {{"joint_12.0", 1.3}});
+    const Grasp g = BestGrasp(hand, query, object.Bounds(), Mat3::Identity(), {{"joint_12.0", 1.3}}, 4);
     std::printf("%s grasp: %s(shift %.3f)\n", name, g.links.c_str(), g.shift);
     ASSERT_GE(g.touching, 3) << name << ": the fingers did not close on the object";
     std::mt19937 rng(15);

@@ -228,7 +228,11 @@ TEST(Fuzz, ObjectFile) {
   fs::copy(src, work / "o", fs::copy_options::recursive);
   Fuzz("object.json", test::ReadFile(src + "/object.json"), [&](const std::string& text) {
     std::ofstream(work / "o/object.json", std::ios::binary) << text;
-    const ObjectModel o = LoadObjectModel(work / "o/object.json");
+    // The description's contact_field is parsed and validated; building the field (a second
+    // per new geometry, tested in contacts/field_test.cpp) is left out of the mutation loop.
+    ContactFieldOptions no_field;
+    no_field.source = "none";
+    const ObjectModel o = LoadObjectModel(work / "o/object.json", {}, no_field);
     if (!(o.mass > 0) || !std::isfinite(o.mass) || o.pieces.empty()) return std::string("a mass or pieces out of range");
     for (const TagPlacement& t : o.tags)
       if (!(t.size > 0) || !t.T_OT.matrix().allFinite()) return std::string("a tag out of range");
