@@ -14,6 +14,7 @@
 
 #include "inhand/app/commands.hpp"
 #include "inhand/app/modalities.hpp"
+#include "inhand/io/object_loader.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/filter/contact_model.hpp"
 #include "inhand/io/detail/json_fields.hpp"
@@ -205,8 +206,24 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
   fs::create_directories(out_dir);
   std::ofstream(out_dir / kOutputMarker) << "written by inhand evaluate\n";
   std::vector<std::pair<std::string, std::pair<std::string, int>>> runs;  // command, (scenario, seed)
+  // Sets with tags (a) only where the scenario's object carries tags (the pen has none).
+  std::map<std::string, std::string> sets_of;
+  for (const ScenarioInfo& info : ListScenarios()) {
+    if (std::find(scenarios.begin(), scenarios.end(), info.name) == scenarios.end()) continue;
+    ContactFieldOptions no_field;
+    no_field.source = "none";
+    const bool tags = !LoadObjectModel(info.object_file, {}, no_field).tags.empty();
+    std::string list, dropped;
+    for (const ModalitySet& m : ParseModalities(cmd.modalities)) {
+      std::string& to = (m.tags && !tags) ? dropped : list;
+      to += (to.empty() ? "" : ",") + m.name;
+    }
+    if (!dropped.empty()) std::cerr << "evaluate: " << info.name << ": " << dropped << " left out (the object has no AprilTags)\n";
+    if (list.empty()) throw InputError("--modalities: no set can run on " + info.name + " (its object has no AprilTags)");
+    sets_of[info.name] = list;
+  }
   for (const std::string& s : scenarios)
-    for (int seed = 1; seed <= cmd.seeds; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, cmd.modalities, cmd.keep_sessions), {s, seed}});
+    for (int seed = 1; seed <= cmd.seeds; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, sets_of.at(s), cmd.keep_sessions), {s, seed}});
   if (cmd.plan) {
     std::ofstream plan(fs::path(cmd.out) / "plan.txt");
     for (const auto& r : runs) plan << r.first << "\n";

@@ -43,12 +43,6 @@ const char* NoiseProfileName(NoiseProfile p) {
   return "?";
 }
 
-std::vector<ScenarioInfo> ListScenarios() {
-  std::vector<ScenarioInfo> out;
-  for (const sim::Scenario& s : sim::Scenarios()) out.push_back({s.name, s.description, s.duration()});
-  return out;
-}
-
 namespace {
 
 // The numbers of each noise profile (documented in sessions/FORMAT.md).
@@ -467,6 +461,13 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   writer->Commit();
   summary.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return summary;
+}
+
+std::vector<ScenarioInfo> ListScenarios() {
+  std::vector<ScenarioInfo> out;
+  for (const sim::Scenario& s : sim::Scenarios())
+    out.push_back({s.name, s.description, s.duration(), (fs::path(AssetDir()) / "objects" / s.object / "object.json").string()});
+  return out;
 }
 
 }  // namespace inhand

@@ -354,6 +354,13 @@ TEST(Cli, EvaluatePlansRunsAndMerges) {
   int lines = 0;
   for (std::string line; std::getline(in, line);) lines += line.find(" simulate ") != std::string::npos;
   EXPECT_EQ(lines, 6);
+  // The pen carries no tags: its runs replay j, jt, jtf, and the user is told (a jta run failed
+  // every pen run before).
+  const test::CommandResult pen = test::RunInhand("evaluate --out " + (dir / "pen") + " --seeds 1 --scenarios pen-fingertip --plan");
+  ASSERT_EQ(pen.exit_code, 0) << pen.output;
+  EXPECT_NE(pen.output.find("pen-fingertip: jta left out (the object has no AprilTags)"), std::string::npos) << pen.output;
+  const std::string pen_plan = test::ReadFile(dir / "pen/plan.txt");
+  EXPECT_NE(pen_plan.find("--modalities 'j,jt,jtf'"), std::string::npos) << pen_plan;
   // A real (small) evaluation: one seed of one scenario.
   const test::CommandResult run = test::RunInhand("evaluate --out " + (dir / "e") + " --seeds 1 --scenarios ketchup-power-grasp");
   ASSERT_EQ(run.exit_code, 0) << run.output;

@@ -25,6 +25,7 @@ struct ScenarioInfo {
   std::string name;
   std::string description;
   double duration = 0.0;  // [s]
+  std::string object_file;  // the object description it simulates (assets/objects/NAME/object.json)
 };
 std::vector<ScenarioInfo> ListScenarios();
 
