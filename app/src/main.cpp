@@ -21,12 +21,12 @@ int main(int argc, char** argv) {
   model_cmd->add_option("--render", model.render, "write a PNG preview (three views)");
 
   inhand::app::CompareCommand compare;
-  auto* compare_cmd = cli.add_subcommand("compare", "Compare two images (image regression); exit 0 match, 1 differ, 2 unreadable");
-  compare_cmd->add_option("A", compare.a, "first image")->required();
-  compare_cmd->add_option("B", compare.b, "second image")->required();
+  auto* compare_cmd = cli.add_subcommand("compare", "Compare two images, or two folders of frames pairwise (image regression); exit 0 match, 1 differ, 2 unreadable");
+  compare_cmd->add_option("A", compare.a, "first image, or folder of frames (replay --frames)")->required();
+  compare_cmd->add_option("B", compare.b, "second image, or folder of frames")->required();
   compare_cmd->add_option("--max-channel-delta", compare.max_channel_delta, "per-channel tolerance (0..255)")->capture_default_str();
   compare_cmd->add_option("--max-bad-fraction", compare.max_bad_fraction, "allowed fraction of pixels beyond it")->capture_default_str();
-  compare_cmd->add_option("--diff", compare.diff, "write a difference heat map (PNG)");
+  compare_cmd->add_option("--diff", compare.diff, "write a difference heat map (PNG; for folders: a folder, one per differing frame)");
 
   inhand::app::SimulateCommand simulate;
   auto* simulate_cmd = cli.add_subcommand("simulate", "Simulate one of the paper's experiments into a session");

@@ -189,6 +189,39 @@ const std::string& ShortSession() {
   return dir.path;
 }
 
+// Image regression over whole replays: two runs' frames are identical at zero tolerance; a
+// changed frame, a missing one and a mixed file/folder pair are reported.
+TEST(Cli, CompareFoldersOfReplayFrames) {
+  test::TempDir dir;
+  for (const char* out : {"a", "b"}) {
+    const test::CommandResult r = test::RunInhand("replay " + ShortSession() + " --modalities j,jt --frames --out " + (dir / out));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const std::string a = dir / "a/frames", b = dir / "b/frames";
+  const std::string zero = " --max-channel-delta 0 --max-bad-fraction 0";
+  const test::CommandResult same = test::RunInhand("compare " + a + " " + b + zero);
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_NE(same.output.find("match: 51 frame pairs compared, 0 differ"), std::string::npos) << same.output;
+  // One frame changed in 40 pixels, one removed.
+  Image8 img = ReadImage(b + "/frame_000007.png");
+  for (int x = 100; x < 140; ++x) img.pixel(x, 100)[0] = static_cast<std::uint8_t>(255 - img.pixel(x, 100)[0]);
+  WriteImage(b + "/frame_000007.png", img);
+  std::filesystem::remove(b + "/frame_000030.png");
+  const test::CommandResult differ = test::RunInhand("compare " + a + " " + b + zero + " --diff " + (dir / "diff"));
+  EXPECT_EQ(differ.exit_code, 1) << differ.output;
+  EXPECT_NE(differ.output.find("DIFFER: 50 frame pairs compared, 2 differ"), std::string::npos) << differ.output;
+  EXPECT_NE(differ.output.find("frame_000030.png: only in " + a), std::string::npos) << differ.output;
+  EXPECT_NE(differ.output.find("frame_000007.png: "), std::string::npos) << differ.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "diff/frame_000007.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "diff/frame_000008.png"));
+  // Within a tolerance that allows those 40 bad pixels, the changed frame matches.
+  const test::CommandResult tolerant = test::RunInhand("compare " + a + " " + b + " --max-channel-delta 0 --max-bad-fraction 0.0002");
+  EXPECT_NE(tolerant.output.find("1 differ"), std::string::npos) << tolerant.output;
+  const test::CommandResult mixed = test::RunInhand("compare " + a + " " + a + "/frame_000001.png");
+  EXPECT_EQ(mixed.exit_code, 2) << mixed.output;
+  EXPECT_NE(mixed.output.find("give two images or two folders"), std::string::npos) << mixed.output;
+}
+
 TEST(Cli, ReplayEndToEnd) {
   test::TempDir dir;
   const test::CommandResult r = test::RunInhand("replay " + ShortSession() + " --out " + (dir / "replay") + " --frames");
