@@ -12,7 +12,7 @@ namespace inhand {
 // When penetrating, c_f - c_o is the smallest displacement of the link that resolves it.
 struct ContactPair {
   int link = -1;                  // hand link index
-  int piece = -1;                 // object piece index
+  int piece = -1;                 // object piece index; -1: the object as a whole (its field)
   double distance = 0.0;          // signed [m]
   Vec3 c_o_P = Vec3::Zero();      // witness point on the object, palm frame
   Vec3 c_f_P = Vec3::Zero();      // witness point on the link, palm frame

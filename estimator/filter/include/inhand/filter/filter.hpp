@@ -33,7 +33,7 @@ struct FilterTrace {
   struct Contact {
     ContactKind kind = ContactKind::kCandidate;
     int link = -1;
-    int piece = -1;
+    int piece = -1;                 // the ContactPair's: -1 for the object as a whole
     int iteration = 0;
     double distance = 0.0;          // [m] signed, before the update
     Vec3 c_o_P = Vec3::Zero();
