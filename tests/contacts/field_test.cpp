@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
@@ -15,6 +17,8 @@
 
 namespace inhand {
 namespace {
+
+namespace fs = std::filesystem;
 
 using Tri = std::array<Vec3, 3>;
 
@@ -316,6 +320,34 @@ TEST(ContactField, CacheRoundTripsAndIsKeyedByGeometry) {
   std::filesystem::resize_file(a.field_cache, 100);
   const ObjectModel d = PrismObject(2, "auto", cache.path());
   EXPECT_EQ(d.field->values, a.field->values);
+}
+
+TEST(ContactField, ObjectJsonSettingsAreReadAndChecked) {
+  test::TempDir dir;
+  fs::copy(test::ProjectAsset("objects/brush"), dir / "b", fs::copy_options::recursive);
+  const std::string json = test::ReadFile(dir / "b/object.json");
+  auto with = [&](const std::string& setting) {
+    std::string text = json;
+    const std::size_t at = text.find("\"contact_field\"");
+    const std::size_t end = text.find('\n', at);
+    text.replace(at, end - at, "\"contact_field\": " + setting + ",");
+    std::ofstream(dir / "b/object.json") << text;
+    return dir / "b/object.json";
+  };
+  const ObjectModel none = LoadObjectModel(with(R"({"source": "none"})"));
+  EXPECT_FALSE(none.field);
+  const ObjectModel coarse = LoadObjectModel(with(R"({"source": "visual", "spacing": 0.004, "padding": 0.01})"));
+  ASSERT_TRUE(coarse.field);
+  EXPECT_DOUBLE_EQ(coarse.field->spacing, 0.004);
+  EXPECT_NE(coarse.field->source.find("closed mesh"), std::string::npos);
+  for (const char* bad : {R"({"spacng": 0.001})", R"({"source": "sdf"})", R"({"spacing": -1})", R"("pieces")"}) {
+    try {
+      LoadObjectModel(with(bad));
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("contact_field"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(ContactField, BadParametersAreNamed) {

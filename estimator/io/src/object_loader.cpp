@@ -173,6 +173,10 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
   ContactFieldOptions field;
   if (root.Has("contact_field")) {
     const jsonf::Field c = root["contact_field"];
+    if (!c.value.is_object()) c.Fail("an object with \"source\", \"spacing\" or \"padding\"");
+    for (auto it = c.value.begin(); it != c.value.end(); ++it)
+      if (it.key() != "source" && it.key() != "spacing" && it.key() != "padding")
+        throw InputError(c.Where() + ": unknown key '" + it.key() + "', expected \"source\", \"spacing\" or \"padding\"");
     if (c.Has("source")) field.source = c["source"].String();
     if (c.Has("spacing")) field.params.spacing = c["spacing"].PositiveNumber();
     if (c.Has("padding")) field.params.padding = c["padding"].NonNegativeNumber();

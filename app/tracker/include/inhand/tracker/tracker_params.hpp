@@ -39,11 +39,11 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
 // Reads a parameter file; InputError naming the file when it cannot be read or a field is wrong.
 TrackerParams ReadTrackerParams(const std::string& path);
 
-// The first joint (configuration index) whose sample must not be fused under `params`, or -1.
-// `torque` tells whether it is the torque (not a number) rather than the position.
-// Clamps every joint with limits into them.
+// Clamps every joint with limits into them (joints.clamp_to_limits).
 void ClampToLimits(const HandModel& hand, Eigen::Ref<Eigen::VectorXd> q);
 
+// The first joint (configuration index) whose sample must not be fused under `params`, or -1.
+// `torque` tells whether it is the torque (not a number) rather than the position.
 struct RejectedJoint {
   int joint = -1;
   bool torque = false;
