@@ -272,9 +272,12 @@ int RunModel(const ModelCommand& cmd) {
     if (!cmd.render.empty()) {
       // The object as it looks, then its pieces in distinct colours from the side and above.
       const ObjectModel pieces = PiecesAsObject(object);
+      std::vector<int> object_meshes, piece_meshes;
       RenderPreview(cmd.render, {object.name, std::to_string(object.pieces.size()) + " pieces, side", "pieces, above"},
                     [&](Renderer& r, Scene& s, int view) {
-                      AddObject(s, UploadObject(r, view == 0 ? object : pieces), Transform::Identity());
+                      std::vector<int>& meshes = view == 0 ? object_meshes : piece_meshes;
+                      if (meshes.empty()) meshes = UploadObject(r, view == 0 ? object : pieces);
+                      AddObject(s, meshes, Transform::Identity());
                     },
                     object.Bounds());
     }

@@ -101,7 +101,7 @@ TEST(Cli, ModelRecognisesAYcbObject) {
       if (mx - mn > 80) hues.insert((p[0] / 32) * 64 + (p[1] / 32) * 8 + p[2] / 32);
     }
   EXPECT_GT(hues.size(), 12u);
-  // The text form says the same; --object on a hand URDF makes it one link's object.
+  // The text form says the same.
   const test::CommandResult text = test::RunInhand("model " + urdf, "XDG_CACHE_HOME=" + dir.path());
   EXPECT_NE(text.output.find("object 'mustard_bottle'"), std::string::npos) << text.output;
   EXPECT_NE(text.output.find("signed distance field"), std::string::npos) << text.output;
