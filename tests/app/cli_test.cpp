@@ -77,7 +77,7 @@ TEST(Cli, ModelRecognisesAYcbObject) {
   INHAND_REQUIRE_SHARED_ASSETS();
   test::TempDir dir;
   const std::string urdf = test::SharedAssets() + "/objects/ycb/mustard_bottle.urdf";
-  const test::CommandResult r = test::RunInhand("model " + urdf + " --json --render " + (dir / "mustard.png"), "XDG_CACHE_HOME=" + dir.path());
+  const test::CommandResult r = test::RunInhand("model " + urdf + " --json --render " + (dir / "mustard.png"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Json j = Json::parse(r.output.substr(0, r.output.rfind('}') + 1));
   EXPECT_EQ(j.at("kind"), "object");
@@ -89,7 +89,6 @@ TEST(Cli, ModelRecognisesAYcbObject) {
   EXPECT_NE(j.at("decomposition").get<std::string>().find("components of textured_vhacd.stl"), std::string::npos);
   EXPECT_NE(j.at("contact_field").at("source").get<std::string>().find("closed mesh"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(j.at("contact_field").at("cache_file").get<std::string>()));
-  EXPECT_EQ(j.at("contact_field").at("cache_file").get<std::string>().rfind(dir.path(), 0), 0u);
   EXPECT_EQ(j.at("mesh_files").size(), 2u);
   // The pieces' view is colourful: many distinct saturated colours.
   const Image8 img = ReadImage(dir / "mustard.png");
@@ -102,7 +101,7 @@ TEST(Cli, ModelRecognisesAYcbObject) {
     }
   EXPECT_GT(hues.size(), 12u);
   // The text form says the same.
-  const test::CommandResult text = test::RunInhand("model " + urdf, "XDG_CACHE_HOME=" + dir.path());
+  const test::CommandResult text = test::RunInhand("model " + urdf);
   EXPECT_NE(text.output.find("object 'mustard_bottle'"), std::string::npos) << text.output;
   EXPECT_NE(text.output.find("signed distance field"), std::string::npos) << text.output;
 }

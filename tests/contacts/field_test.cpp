@@ -245,19 +245,21 @@ struct Prism {
   }
 };
 
-ObjectModel PrismObject(int cuts, const std::string& source, const std::string& cache) {
+ObjectModel PrismObject(int cuts, const std::string& source, const std::string& cache, double spacing = 1e-3) {
   ObjectModel o;
   o.name = "prism";
   o.pieces = Prism().Pieces(cuts);
   ContactFieldOptions options;
   options.source = source;
   options.cache_dir = cache;
+  options.params.spacing = spacing;
   AttachContactField(o, options, "prism");
   return o;
 }
 
+// Fields are cached by content in the user's cache folder (as in use): each is built once per
+// machine, by whichever test needs it first; only the cache test uses a folder of its own.
 TEST(ContactField, SphereAndCapsuleIntoAConvexSolidWholeAndCut) {
-  test::TempDir cache;
   const std::vector<ConvexPiece> whole = Prism().Pieces(1);
   ASSERT_EQ(whole.size(), 1u);
   const TriangleMesh surface = whole[0].ToMesh();
@@ -271,7 +273,7 @@ TEST(ContactField, SphereAndCapsuleIntoAConvexSolidWholeAndCut) {
   };
   // One hull through GJK (no field) and through the field; then 2, 8 and 64 pieces.
   for (const Case& c : {Case{1, "none", 1}, Case{1, "pieces", 1}, Case{0, "auto", 2}, Case{2, "auto", 8}, Case{4, "auto", 64}}) {
-    const ObjectModel object = PrismObject(c.cuts, c.source, cache.path());
+    const ObjectModel object = PrismObject(c.cuts, c.source, "");
     EXPECT_EQ(object.pieces.size(), c.pieces);
     EXPECT_EQ(object.field != nullptr, c.source != "none");
     const std::string what = std::to_string(object.pieces.size()) + " piece(s), field " + c.source;
@@ -286,10 +288,9 @@ TEST(ContactField, SphereAndCapsuleIntoAConvexSolidWholeAndCut) {
 
 TEST(ContactField, PerPieceDepthIsWhatTheFieldFixes) {
   // The failure the field exists for: 64 pieces, per-piece GJK stops at a piece's thickness.
-  test::TempDir cache;
   const HandModel hand = ProbeHand(0.008);
-  const ObjectModel pieces = PrismObject(4, "none", cache.path());
-  const ObjectModel field = PrismObject(4, "auto", cache.path());
+  const ObjectModel pieces = PrismObject(4, "none", "");
+  const ObjectModel field = PrismObject(4, "auto", "");
   const std::vector<ConvexPiece> whole = Prism().Pieces(1);
   const TriangleMesh surface = whole[0].ToMesh();
   const MeshOracle oracle({&surface});
@@ -305,20 +306,20 @@ TEST(ContactField, PerPieceDepthIsWhatTheFieldFixes) {
 }
 
 TEST(ContactField, CacheRoundTripsAndIsKeyedByGeometry) {
-  test::TempDir cache;
-  const ObjectModel a = PrismObject(2, "auto", cache.path());
+  test::TempDir cache;  // a 3 mm grid: the cache is under test here, not the accuracy
+  const ObjectModel a = PrismObject(2, "auto", cache.path(), 3e-3);
   ASSERT_TRUE(a.field);
   ASSERT_TRUE(std::filesystem::exists(a.field_cache));
-  const ObjectModel b = PrismObject(2, "auto", cache.path());  // read back
+  const ObjectModel b = PrismObject(2, "auto", cache.path(), 3e-3);  // read back
   EXPECT_EQ(a.field_cache, b.field_cache);
   EXPECT_EQ(a.field->values, b.field->values);
   EXPECT_EQ(a.field->dims, b.field->dims);
   EXPECT_EQ(a.field->source, b.field->source);
-  const ObjectModel c = PrismObject(4, "auto", cache.path());  // other pieces, other file
+  const ObjectModel c = PrismObject(4, "auto", cache.path(), 3e-3);  // other pieces, other file
   EXPECT_NE(a.field_cache, c.field_cache);
   // A truncated cache file is rebuilt, not trusted.
   std::filesystem::resize_file(a.field_cache, 100);
-  const ObjectModel d = PrismObject(2, "auto", cache.path());
+  const ObjectModel d = PrismObject(2, "auto", cache.path(), 3e-3);
   EXPECT_EQ(d.field->values, a.field->values);
 }
 
@@ -374,12 +375,10 @@ TEST(ContactField, BadParametersAreNamed) {
 // along three directions.
 TEST(ContactField, YcbScansWithTheirVhacdPieces) {
   INHAND_REQUIRE_SHARED_ASSETS();
-  test::TempDir cache;
   const HandModel hand = ProbeHand(0.014);
   int compared = 0, normals = 0;
   for (const char* name : {"mustard_bottle", "bleach_cleanser", "large_marker"}) {
     ContactFieldOptions options;
-    options.cache_dir = cache.path();
     const std::string file = test::SharedAssets() + "/objects/ycb/" + name + ".urdf";
     const ObjectModel object = LoadObjectModel(file, {}, options);
     ASSERT_TRUE(object.field) << name;
@@ -425,12 +424,10 @@ TEST(ContactField, YcbScansWithTheirVhacdPieces) {
 // sphere from the object's centre), per-piece GJK beside the field and the exact depth.
 TEST(ContactField, MustardSweepReport) {
   INHAND_REQUIRE_SHARED_ASSETS();
-  test::TempDir cache;
   const HandModel hand = ProbeHand(0.014);
   const std::string file = test::SharedAssets() + "/objects/ycb/mustard_bottle.urdf";
   ContactFieldOptions none, field;
   none.source = "none";
-  none.cache_dir = field.cache_dir = cache.path();
   const ObjectModel per_piece = LoadObjectModel(file, {}, none);
   const ObjectModel whole = LoadObjectModel(file, {}, field);
   std::vector<const TriangleMesh*> visual;
