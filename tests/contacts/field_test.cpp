@@ -99,14 +99,21 @@ Exact ExactSphere(const MeshOracle& oracle, const Vec3& centre, double radius) {
 }
 
 Exact ExactCapsule(const MeshOracle& oracle, const Vec3& a, const Vec3& b, double radius) {
+  // Every 1 mm along the segment, then every 0.1 mm around the best sample.
+  const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 1e-3)));
   double best = std::numeric_limits<double>::infinity();
-  Vec3 at = a;
-  for (int i = 0; i <= 80; ++i) {
-    const Vec3 x = a + (b - a) * (i / 80.0);
-    const double d = oracle.Signed(x);
-    if (d < best) best = d, at = x;
+  double at = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double d = oracle.Signed(a + (b - a) * (double(i) / n));
+    if (d < best) best = d, at = double(i) / n;
   }
-  return ExactSphere(oracle, at, radius);
+  const double centre = at;
+  for (int i = -9; i <= 9; ++i) {
+    const double u = std::clamp(centre + i * 0.1 / n, 0.0, 1.0);
+    const double d = oracle.Signed(a + (b - a) * u);
+    if (d < best) best = d, at = u;
+  }
+  return ExactSphere(oracle, a + (b - a) * at, radius);
 }
 
 struct Sweep {
