@@ -279,9 +279,11 @@ struct BulletContactQuery::Impl {
             if (field->Distance(T_OL * patch.center_B) - patch.radius > 0.0) continue;
             for (int i = patch.first; i < patch.first + patch.count; ++i) {
               const Vec3 x = T_OL * probe.points_B[static_cast<std::size_t>(i)];
+              const double d = field->Distance(x);
+              if (!(d < 0.0)) continue;
               Vec3 g;
-              const double d = field->Distance(x, &g);
-              if (d < 0.0) sum -= d * g;
+              field->Distance(x, &g);  // the gradient only where it counts
+              sum -= d * g;
             }
           }
         }
