@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <thread>
 
 #include "inhand/core/error.hpp"
@@ -317,32 +316,6 @@ double PieceSignedDistance(const ConvexPiece& piece, const Vec3& p) {
   INHAND_CHECK(false, "unknown convex piece kind");
 }
 
-bool IsWatertightForParity(const std::vector<const TriangleMesh*>& meshes, double weld_tolerance) {
-  std::map<std::array<long long, 3>, int> ids;
-  auto id = [&](const Vec3& v) {
-    const double q = std::max(weld_tolerance, 1e-12);
-    const std::array<long long, 3> key{std::llround(v.x() / q), std::llround(v.y() / q), std::llround(v.z() / q)};
-    return ids.emplace(key, static_cast<int>(ids.size())).first->second;
-  };
-  std::map<std::pair<int, int>, std::array<int, 2>> edges;  // (min, max) -> uses (forward, backward)
-  bool any = false;
-  for (const TriangleMesh* m : meshes) {
-    for (const auto& t : m->triangles) {
-      any = true;
-      const int v[3] = {id(m->vertices[t[0]]), id(m->vertices[t[1]]), id(m->vertices[t[2]])};
-      for (int k = 0; k < 3; ++k) {
-        const int a = v[k], b = v[(k + 1) % 3];
-        if (a == b) continue;  // a degenerate triangle crosses no ray
-        ++edges[{std::min(a, b), std::max(a, b)}][a < b ? 0 : 1];
-      }
-    }
-  }
-  if (!any) return false;
-  for (const auto& [edge, uses] : edges)
-    if (uses[0] != uses[1]) return false;
-  return true;
-}
-
 DistanceField BuildDistanceFieldFromMesh(const std::vector<const TriangleMesh*>& meshes,
                                          const DistanceFieldParams& params) {
   params.Validate("distance field");
@@ -373,16 +346,16 @@ DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& piece
   // Primitives by their exact distance; hulls by their planes (cached).
   std::vector<Planes> planes;
   for (const ConvexPiece& p : pieces) planes.push_back(p.kind == ConvexPiece::Kind::kHull ? HullPlanes(p) : Planes{});
-  auto inside_any = [&](const Vec3& x, double margin) {
+  auto inside_any = [&](const Vec3& x) {
     for (std::size_t i = 0; i < pieces.size(); ++i) {
       const ConvexPiece& p = pieces[i];
-      if ((x - p.bounding_center).norm() > p.bounding_radius + margin) continue;
+      if ((x - p.bounding_center).norm() > p.bounding_radius) continue;
       if (p.kind != ConvexPiece::Kind::kHull) {
-        if (PieceSignedDistance(p, x) <= -margin) return true;
+        if (PieceSignedDistance(p, x) <= 0.0) return true;
         continue;
       }
       bool in = true;
-      for (std::size_t f = 0; f < planes[i].n.size() && in; ++f) in = planes[i].n[f].dot(x) - planes[i].d[f] <= -margin;
+      for (std::size_t f = 0; f < planes[i].n.size() && in; ++f) in = planes[i].n[f].dot(x) - planes[i].d[f] <= 0.0;
       if (in) return true;
     }
     return false;
@@ -410,19 +383,12 @@ DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& piece
       const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
       if (!(n.norm() > 0.0)) continue;
       const Vec3 centre = (t[0] + t[1] + t[2]) / 3.0;
-      if (!inside_any(centre + probe * n.normalized(), 0.0)) surface.push_back(t);
+      if (!inside_any(centre + probe * n.normalized())) surface.push_back(t);
     }
   }
   INHAND_CHECK(!surface.empty(), "the union of the pieces has no surface");
-  return Fill(surface, g, [&](std::size_t, const Vec3& x) { return inside_any(x, 0.0); },
+  return Fill(surface, g, [&](std::size_t, const Vec3& x) { return inside_any(x); },
               "union of " + std::to_string(pieces.size()) + " pieces");
-}
-
-Aabb DistanceField::Box() const {
-  Aabb b;
-  b.Extend(origin);
-  b.Extend(origin + spacing * (dims.cast<double>() - Vec3::Ones()));
-  return b;
 }
 
 double DistanceField::Distance(const Vec3& p_O) const {

@@ -1,5 +1,6 @@
 #include "inhand/core/mesh.hpp"
 
+#include <array>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -137,6 +138,30 @@ bool IsClosed(const TriangleMesh& mesh, double weld_tolerance) {
     auto it = directed.find({edge.second, edge.first});
     if (it == directed.end() || it->second != 1) return false;
   }
+  return true;
+}
+
+bool IsWatertightForParity(const std::vector<const TriangleMesh*>& meshes, double weld_tolerance) {
+  std::vector<Vec3> vertices;
+  for (const TriangleMesh* m : meshes) vertices.insert(vertices.end(), m->vertices.begin(), m->vertices.end());
+  const std::vector<int> id = WeldVertices(vertices, weld_tolerance);
+  std::map<std::pair<int, int>, std::array<int, 2>> edges;  // (min, max) -> uses (forward, backward)
+  std::size_t base = 0;
+  bool any = false;
+  for (const TriangleMesh* m : meshes) {
+    for (const auto& t : m->triangles) {
+      any = true;
+      for (int k = 0; k < 3; ++k) {
+        const int a = id[base + t[k]], b = id[base + t[(k + 1) % 3]];
+        if (a == b) continue;
+        ++edges[{std::min(a, b), std::max(a, b)}][a < b ? 0 : 1];
+      }
+    }
+    base += m->vertices.size();
+  }
+  if (!any) return false;
+  for (const auto& [edge, uses] : edges)
+    if (uses[0] != uses[1]) return false;
   return true;
 }
 

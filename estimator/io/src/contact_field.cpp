@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "inhand/core/error.hpp"
+#include "inhand/io/detail/fnv1a.hpp"
 #include "inhand/io/mesh_io.hpp"
 #include "inhand/io/object_loader.hpp"
 
@@ -17,21 +18,6 @@ namespace inhand {
 namespace {
 
 constexpr char kMagic[8] = {'i', 'n', 'h', 'S', 'D', 'F', '0', '1'};
-
-// FNV-1a over the geometry the field is built from and the parameters: the cache key.
-class Hasher {
- public:
-  void Mix(const void* data, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h_ = (h_ ^ b[i]) * 1099511628211ULL;
-  }
-  void Mix(const Vec3& v) { Mix(v.data(), 3 * sizeof(double)); }
-  void Mix(double x) { Mix(&x, sizeof x); }
-  std::uint64_t value() const { return h_; }
-
- private:
-  std::uint64_t h_ = 1469598103934665603ULL;
-};
 
 bool ReadField(const fs::path& path, DistanceField& f) {
   std::ifstream in(path, std::ios::binary);
@@ -119,7 +105,7 @@ void AttachContactField(ObjectModel& obj, const ContactFieldOptions& options, co
   obj.field.reset();
   obj.field_cache.clear();
   if (source == "none") return;
-  Hasher h;
+  detail::Fnv1a h;  // the cache key: the geometry the field is built from and the parameters
   h.Mix("inhand-sdf-1", 12);
   h.Mix(source.data(), source.size());
   h.Mix(options.params.spacing);

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "inhand/core/error.hpp"
+#include "inhand/io/detail/fnv1a.hpp"
 
 namespace fs = std::filesystem;
 
@@ -216,17 +217,13 @@ namespace {
 
 // FNV-1a over the mesh and the parameters: the cache key.
 std::uint64_t HashMesh(const TriangleMesh& mesh, const HacdParams& params) {
-  std::uint64_t h = 1469598103934665603ULL;
-  auto mix = [&h](const void* data, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ULL;
-  };
-  for (const Vec3& v : mesh.vertices) mix(v.data(), sizeof(double) * 3);
-  for (const auto& t : mesh.triangles) mix(t.data(), sizeof(int) * 3);
-  mix(&params.min_pieces, sizeof(params.min_pieces));
-  mix(&params.concavity, sizeof(params.concavity));
-  mix(&params.vertices_per_piece, sizeof(params.vertices_per_piece));
-  return h;
+  detail::Fnv1a h;
+  for (const Vec3& v : mesh.vertices) h.Mix(v);
+  for (const auto& t : mesh.triangles) h.Mix(t.data(), sizeof(int) * 3);
+  h.Mix(&params.min_pieces, sizeof(params.min_pieces));
+  h.Mix(params.concavity);
+  h.Mix(&params.vertices_per_piece, sizeof(params.vertices_per_piece));
+  return h.value();
 }
 
 std::vector<ConvexPiece> ReadPiecesObj(const std::string& path, const std::string& source) {

@@ -32,7 +32,6 @@ struct DistanceField {
   std::string source;               // "closed visual mesh (16384 triangles)", "union of 66 pieces"
 
   bool empty() const { return values.empty(); }
-  Aabb Box() const;
   // Signed distance at `p_O`: trilinear inside the grid; outside it, the value at the nearest
   // grid point plus the distance to that point (a consistent over-estimate far away).
   double Distance(const Vec3& p_O) const;
@@ -41,7 +40,8 @@ struct DistanceField {
   double Distance(const Vec3& p_O, Vec3* unit_gradient) const;
 };
 
-// The field of a closed triangle soup (`IsWatertightForParity`), e.g. a scanned object's mesh.
+// The field of a closed triangle soup (IsWatertightForParity, mesh.hpp), e.g. a scanned object's
+// mesh.
 DistanceField BuildDistanceFieldFromMesh(const std::vector<const TriangleMesh*>& meshes,
                                          const DistanceFieldParams& params);
 // The field of the union of convex pieces (overlapping, touching or apart). Piece faces that lie
@@ -49,12 +49,6 @@ DistanceField BuildDistanceFieldFromMesh(const std::vector<const TriangleMesh*>&
 // surface.
 DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& pieces,
                                            const DistanceFieldParams& params);
-
-// True when every edge (vertices welded by position within `weld_tolerance`) is used by as many
-// triangles in one direction as in the other, and by at least two: ray parity is then well
-// defined (non-manifold edges shared by four triangles are fine; holes are not).
-bool IsWatertightForParity(const std::vector<const TriangleMesh*>& meshes,
-                           double weld_tolerance = 1e-9);
 
 // Signed distance of `p` to one convex piece (exact for primitives and, inside, for hulls;
 // outside a hull, exact through the closest point on its triangles). For tests and builders.

@@ -63,6 +63,12 @@ MassProperties ComputeMassProperties(const std::vector<const TriangleMesh*>& mes
 // True when every edge (vertices welded by position within `weld_tolerance`) is shared by
 // exactly two triangles with opposite orientation.
 bool IsClosed(const TriangleMesh& mesh, double weld_tolerance = 1e-9);
+// Weaker, over several meshes together: every edge (welded as above) is used by as many
+// triangles in one direction as in the other, so ray parity is well defined (non-manifold edges
+// shared by four triangles are fine, as in scans; holes are not). Degenerate triangles are
+// ignored: they cross no ray.
+bool IsWatertightForParity(const std::vector<const TriangleMesh*>& meshes,
+                           double weld_tolerance = 1e-9);
 
 // Splits a mesh into its edge-connected components (vertices welded by position; triangles
 // connect across edges shared by exactly two triangles).
