@@ -128,6 +128,13 @@ struct Tracker::Impl {
     filter.UpdateContacts(tau);
     {
       std::lock_guard<std::mutex> lock(mutex);
+      if (adopt_pending) {
+        // The worker published while this sample was being fused: its state is at the previous
+        // sample (it publishes only when it has every committed one), so fuse this one again on it.
+        AdoptLocked();
+        filter.Predict(q_used, dt);
+        filter.UpdateContacts(tau);
+      }
       const long k = ++last;
       if (k - first >= static_cast<long>(ring.size())) first = k - static_cast<long>(ring.size()) + 1;
       Slot& s = At(k);
@@ -195,7 +202,10 @@ struct Tracker::Impl {
     if (!options.threaded) return;
     std::lock_guard<std::mutex> lock(mutex);
     if (worker_error) std::rethrow_exception(std::exchange(worker_error, nullptr));
-    if (!adopt_pending) return;
+    if (adopt_pending) AdoptLocked();
+  }
+
+  void AdoptLocked() {
     filter.Restore(adopt_state);
     std::swap(last_visual, adopt_visual);
     adopt_pending = false;
