@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "inhand/core/error.hpp"
 
 namespace inhand::app {
 
@@ -28,17 +29,34 @@ FrameComposer::FrameComposer(const SessionPlayer& player) : p_(player) {
   painter_ = std::make_unique<OverlayPainter>(renderer_, object_meshes_);
 }
 
-void FrameComposer::AddEstimates(OverlayFrame* of, double t) const {
+PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, double t) {
+  PictureState st;
+  st.t = t;
+  st.camera_frame = camera_frame;
+  if (camera_frame >= 0) st.camera = p.last_frame() == camera_frame ? p.last_image() : p.session().LoadImage(camera_frame);
+  for (std::size_t i = 0; i < p.sets().size(); ++i) {
+    const Filter& f = p.tracker(i).filter();
+    PictureState::Set set;
+    set.record = p.last(i);
+    set.position_covariance = f.covariance().topLeftCorner<3, 3>();
+    set.contacts = f.trace().contacts;
+    set.visual = f.trace().visual;
+    st.sets.push_back(std::move(set));
+  }
+  st.link_poses = p.tracker(p.sets().size() - 1).filter().kinematics().link_poses();
+  return st;
+}
+
+void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const {
   const Session& s = p_.session();
   if (s.has_groundtruth())
-    of->estimates.push_back({"truth", kColourTruth, s.GroundTruthAt(t), Mat3::Zero(), true, {}, {}});
+    of->estimates.push_back({"truth", kColourTruth, s.GroundTruthAt(st.t), Mat3::Zero(), true, {}, {}});
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
-    const Filter& f = p_.tracker(i).filter();
-    const EstimateRecord& r = p_.last(i);
-    OverlayEstimate e{p_.sets()[i].name, p_.sets()[i].colour, r.T_PO, f.covariance().topLeftCorner<3, 3>(), false, {}, {}};
-    for (const FilterTrace::Contact& c : f.trace().contacts)
-      e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
-    for (const FilterTrace::Visual& v : f.trace().visual) e.features.push_back({v.measured, v.predicted, !v.gated});
+    const PictureState::Set& set = st.sets[i];
+    const EstimateRecord& r = set.record;
+    OverlayEstimate e{p_.sets()[i].name, p_.sets()[i].colour, r.T_PO, set.position_covariance, false, {}, {}};
+    for (const FilterTrace::Contact& c : set.contacts) e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
+    for (const FilterTrace::Visual& v : set.visual) e.features.push_back({v.measured, v.predicted, !v.gated});
     of->estimates.push_back(e);
     std::ostringstream line;
     line << std::fixed << std::setprecision(1) << p_.sets()[i].name << ": ";
@@ -49,62 +67,61 @@ void FrameComposer::AddEstimates(OverlayFrame* of, double t) const {
   }
 }
 
-Scene FrameComposer::ExternalScene(double t, const Intrinsics& K) const {
+Scene FrameComposer::ExternalScene(const PictureState& st, const Intrinsics& K) const {
   const Session& s = p_.session();
-  const std::size_t last = p_.sets().size() - 1;
   Scene outside;
   outside.K = K;
   outside.background = Vec3(0.93, 0.94, 0.96);
   const Aabb box = p_.models().object.Bounds();
-  const Vec3 centre = p_.last(last).T_PO * box.Center();
+  const Vec3 centre = st.sets.back().record.T_PO * box.Center();
   outside.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), orbit.distance, orbit.azimuth, orbit.elevation, Vec3::UnitY());
-  AddHand(outside, hand_meshes_, p_.tracker(last).filter().kinematics().link_poses(), 1.0);
+  AddHand(outside, hand_meshes_, st.link_poses, 1.0);
   if (s.has_groundtruth()) {
     ObjectStyle truth;
     truth.rgba = Eigen::Vector4d(0.15, 0.15, 0.15, 1.0);
-    AddObject(outside, object_meshes_, s.GroundTruthAt(t), truth);
+    AddObject(outside, object_meshes_, s.GroundTruthAt(st.t), truth);
   }
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     ObjectStyle style;
     const Rgb& c = p_.sets()[i].colour;
     style.rgba = Eigen::Vector4d(c.r / 255.0, c.g / 255.0, c.b / 255.0, 0.45);
-    AddObject(outside, object_meshes_, p_.last(i).T_PO, style);
+    AddObject(outside, object_meshes_, st.sets[i].record.T_PO, style);
   }
   return outside;
 }
 
-Image8 FrameComposer::Compose(int camera_frame, double t, const OverlayLayers& layers) {
+Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layers) {
   const Session& s = p_.session();
-  const CameraFrame& frame = s.camera_frames().at(static_cast<std::size_t>(camera_frame));
+  INHAND_CHECK(st.camera_frame >= 0 && !st.camera.empty(), "FrameComposer::Compose without a camera frame");
+  const CameraFrame& frame = s.camera_frames().at(static_cast<std::size_t>(st.camera_frame));
   const Intrinsics& K = *s.info().camera;
   OverlayFrame of;
-  of.camera = p_.last_frame() == camera_frame ? p_.last_image() : s.LoadImage(camera_frame);
+  of.camera = st.camera;
   of.T_PC = frame.T_PC;
   of.K = K;
   of.friction_cone_deg = p_.params().filter.friction_cone_deg;
   std::ostringstream hud;
-  hud << std::fixed << std::setprecision(3) << "t = " << t << " s   frame " << camera_frame;
+  hud << std::fixed << std::setprecision(3) << "t = " << st.t << " s   frame " << st.camera_frame;
   of.hud.push_back(hud.str());
-  AddEstimates(&of, t);
+  AddEstimates(&of, st);
   const Image8 annotated = painter_->Paint(of, layers);
 
   // The virtual view: the scene as the last set believes it, from the camera.
   const std::size_t last = p_.sets().size() - 1;
-  const Filter& f = p_.tracker(last).filter();
   RenderOutput virtual_out;
-  renderer_.Render(CameraScene(hand_meshes_, f.kinematics().link_poses(), object_meshes_, f.T_PO(), frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),
+  renderer_.Render(CameraScene(hand_meshes_, st.link_poses, object_meshes_, st.sets.back().record.T_PO, frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),
                    virtual_out, false);
 
   // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
   RenderOutput orbit_out;
-  renderer_.Render(ExternalScene(t, K), orbit_out, false);
+  renderer_.Render(ExternalScene(st, K), orbit_out, false);
   return SideBySide({&annotated, &virtual_out.colour, &orbit_out.colour},
                     {"camera + estimates (truth dashed)", "virtual view at " + p_.sets()[last].name + " estimate",
                      "3-D view: truth dark, estimates translucent"});
 }
 
-Image8 FrameComposer::ComposeExternal(double t, int width, int height, const OverlayLayers& layers) {
-  const Scene scene = ExternalScene(t, IntrinsicsFromFov(width, height, 40.0));
+Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height, const OverlayLayers& layers) {
+  const Scene scene = ExternalScene(st, IntrinsicsFromFov(width, height, 40.0));
   RenderOutput out;
   renderer_.Render(scene, out, false);
   OverlayFrame of;
@@ -113,9 +130,9 @@ Image8 FrameComposer::ComposeExternal(double t, int width, int height, const Ove
   of.K = scene.K;
   of.friction_cone_deg = p_.params().filter.friction_cone_deg;
   std::ostringstream hud;
-  hud << std::fixed << std::setprecision(3) << "t = " << t << " s   3-D view (no camera): truth dark, estimates translucent";
+  hud << std::fixed << std::setprecision(3) << "t = " << st.t << " s   3-D view (no camera): truth dark, estimates translucent";
   of.hud.push_back(hud.str());
-  AddEstimates(&of, t);
+  AddEstimates(&of, st);
   // The objects are already drawn in 3-D: the overlays add contacts, forces, axes and the HUD.
   OverlayLayers l = layers;
   l.silhouette = l.outline = l.features = false;

@@ -2,7 +2,9 @@
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <iostream>
+#include <thread>
 
 #include "inhand/app/commands.hpp"
 #include "inhand/app/gui.hpp"
@@ -71,6 +73,8 @@ int main(int argc, char** argv) {
   replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");
   replay_cmd->add_flag("--mcap", replay.mcap, "also write replay.mcap for Foxglove/Lichtblick (poses, errors, image + overlays, contacts)");
   replay_cmd->add_option("--video-fps", replay.video_fps, "sessions without a camera: frame rate of the 3-D view video")->capture_default_str();
+  replay.jobs = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 16u));
+  replay_cmd->add_option("--jobs", replay.jobs, "threads: the modality sets in parallel and the pictures beside them; 1 runs everything in order on one thread (the outputs are the same)")->capture_default_str();
 
   inhand::app::TagsCommand tags;
   auto* tags_cmd = cli.add_subcommand("tags", "Detect AprilTags in an image (debugging)");

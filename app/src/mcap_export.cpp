@@ -89,13 +89,13 @@ McapExport::McapExport(const std::string& path, const SessionPlayer& player) : p
 
 McapExport::~McapExport() = default;
 
-void McapExport::AddSample(int k) {
+void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
   const Session& s = p_.session();
   const double t = s.t(k);
   const std::uint64_t log = LogTime(t);
   Json errors = {{"t", t}, {"sets", Json::object()}};
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
-    const EstimateRecord& r = p_.last(i);
+    const EstimateRecord& r = records[i];
     const std::string& name = p_.sets()[i].name;
     const Json pose = PoseJson(r.T_PO);
     w_->Write(pose_channels_[i], log, Json{{"timestamp", Time(t)}, {"frame_id", "palm"}, {"pose", pose}}.dump());
@@ -118,7 +118,7 @@ void McapExport::AddSample(int k) {
     w_->Write(tf_, log, Json{{"timestamp", Time(t)}, {"parent_frame_id", "palm"}, {"child_frame_id", "object_truth"},
                              {"translation", pose["position"]}, {"rotation", pose["orientation"]}}.dump());
   }
-  if (const int frame = p_.last_frame(); frame >= 0 && s.info().camera) AddFrame(frame, t);
+  if (frame >= 0 && s.info().camera) AddFrame(frame, t);
 }
 
 void McapExport::AddFrame(int frame, double t) {

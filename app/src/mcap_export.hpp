@@ -20,8 +20,9 @@ class McapExport {
  public:
   McapExport(const std::string& path, const SessionPlayer& player);
   ~McapExport();
-  // After player.Step(k).
-  void AddSample(int k);
+  // Sample k with every set's record (records[i] for set i); `frame` >= 0: the camera frame it
+  // captured, whose overlays are drawn from the player's current state (it must stand at k).
+  void AddSample(int k, const EstimateRecord* records, int frame);
   void Close();
 
  private:

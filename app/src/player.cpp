@@ -1,6 +1,10 @@
 #include "inhand/app/player.hpp"
 
+#include <atomic>
 #include <chrono>
+#include <exception>
+#include <mutex>
+#include <thread>
 #include <cmath>
 #include <sstream>
 
@@ -31,11 +35,13 @@ SessionPlayer::SessionPlayer(const Session& session, const TrackerParams& params
   state_.last.resize(sets_.size());
   q_.setZero(models_.hand.num_q());
   tau_.setZero(models_.hand.num_q());
+  set_q_.assign(sets_.size(), q_);
+  set_tau_.assign(sets_.size(), tau_);
 
   // The report of what will not be used.
   const int n = session_.num_samples();
   for (int k = 0; k < n; ++k) {
-    Gather(k);
+    Gather(k, q_, tau_);
     const RejectedJoint r = ScreenJointSample(models_.hand, params_, q_, tau_);
     if (r.joint >= 0) report_.rejected_samples.push_back({k, r.joint, r.torque, r.torque ? tau_[r.joint] : q_[r.joint]});
   }
@@ -47,12 +53,12 @@ SessionPlayer::SessionPlayer(const Session& session, const TrackerParams& params
   }
 }
 
-void SessionPlayer::Gather(int k) {
+void SessionPlayer::Gather(int k, Eigen::VectorXd& q_out, Eigen::VectorXd& tau_out) const {
   const auto q = session_.q(k);
-  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) q_[static_cast<long>(j)] = q[models_.joint_columns[j]];
-  if (!session_.has_torques()) return;  // tau_ stays zero: no set with t runs on such a session
+  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) q_out[static_cast<long>(j)] = q[models_.joint_columns[j]];
+  if (!session_.has_torques()) return;  // tau stays zero: no set with t runs on such a session
   const auto tau = session_.tau(k);
-  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) tau_[static_cast<long>(j)] = tau[models_.joint_columns[j]];
+  for (std::size_t j = 0; j < models_.joint_columns.size(); ++j) tau_out[static_cast<long>(j)] = tau[models_.joint_columns[j]];
 }
 
 bool SessionPlayer::TruthCovers(double t) const {
@@ -108,56 +114,119 @@ void SessionPlayer::Restore(const Checkpoint& c) {
   state_ = c.state;
 }
 
-void SessionPlayer::Step(int k) {
-  const double t = session_.t(k);
-  Gather(k);
-  for (std::size_t i = 0; i < trackers_.size(); ++i) {
-    Tracker& tracker = *trackers_[i];
-    const auto start = std::chrono::steady_clock::now();
-    tracker.AddJointSample(t, q_, tau_);
-    const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
-    EstimateRecord& r = state_.last[i];
-    r.t = t;
-    r.step_time_us = us;
-    r.contacts = static_cast<int>(tracker.trace().contacts.size());
-    r.constraints = tracker.trace().num_constraints;
-    r.visual_ms = -1.0;
-    r.visual_used = 0;
-  }
-
-  // Camera frames captured by this sample.
+std::size_t SessionPlayer::LoadFramesOf(int k) {
   const auto& frames = session_.camera_frames();
+  const double t = session_.t(k);
+  const std::size_t first = state_.next_frame;
+  images_.clear();
   state_.last_frame = -1;
   while (state_.next_frame < frames.size() && frames[state_.next_frame].t <= t + 1e-9) {
-    const int f = static_cast<int>(state_.next_frame++);
-    const CameraFrame& frame = frames[static_cast<std::size_t>(f)];
-    state_.last_frame = f;
-    state_.image = session_.LoadImage(f);
-    for (std::size_t i = 0; i < trackers_.size(); ++i) {
-      if (!sets_[i].tags && !sets_[i].features) continue;
-      Tracker& tracker = *trackers_[i];
+    state_.last_frame = static_cast<int>(state_.next_frame++);
+    images_.push_back(session_.LoadImage(state_.last_frame));
+  }
+  if (!images_.empty()) state_.image = images_.back();
+  return first;
+}
+
+void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::size_t end_frame, EstimateRecord& r) {
+  const double t = session_.t(k);
+  Eigen::VectorXd& q = set_q_[i];
+  Eigen::VectorXd& tau = set_tau_[i];
+  Gather(k, q, tau);
+  Tracker& tracker = *trackers_[i];
+  const auto start = std::chrono::steady_clock::now();
+  tracker.AddJointSample(t, q, tau);
+  const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
+  r.t = t;
+  r.step_time_us = us;
+  r.contacts = static_cast<int>(tracker.trace().contacts.size());
+  r.constraints = tracker.trace().num_constraints;
+  r.visual_ms = -1.0;
+  r.visual_used = 0;
+  // Camera frames captured by this sample.
+  if (sets_[i].tags || sets_[i].features) {
+    const auto& frames = session_.camera_frames();
+    for (std::size_t f = first_frame; f < end_frame; ++f) {
       const long before = tracker.last_visual().sequence;
-      tracker.AddImage(frame.t, state_.image, frame.T_PC, *session_.info().camera);
+      tracker.AddImage(frames[f].t, images_[f - first_frame], frames[f].T_PC, *session_.info().camera);
       const VisualStep& v = tracker.last_visual();
       if (v.sequence == before) continue;
-      EstimateRecord& r = state_.last[i];
       r.visual_ms = v.ms;
       r.visual_used = v.used;
       r.visual_mahalanobis = v.mean_mahalanobis;
     }
   }
-  for (std::size_t i = 0; i < trackers_.size(); ++i) {
-    const Tracker& tracker = *trackers_[i];
-    EstimateRecord& r = state_.last[i];
-    r.T_PO = tracker.T_PO();
-    const auto P = tracker.filter().covariance();
-    r.sigma_position = P.diagonal().head<3>().cwiseSqrt();
-    r.sigma_orientation = P.diagonal().segment<3>(3).cwiseSqrt();
-    r.biases = tracker.biases();
-    r.gated = tracker.trace().num_gated;  // contacts and visual features of this sample
-    if (TruthCovers(t)) CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
-    else r = WithoutTruth(r);
+  r.T_PO = tracker.T_PO();
+  const auto P = tracker.filter().covariance();
+  r.sigma_position = P.diagonal().head<3>().cwiseSqrt();
+  r.sigma_orientation = P.diagonal().segment<3>(3).cwiseSqrt();
+  r.biases = tracker.biases();
+  r.gated = tracker.trace().num_gated;  // contacts and visual features of this sample
+  if (TruthCovers(t)) CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
+  else r = WithoutTruth(r);
+}
+
+void SessionPlayer::Step(int k) {
+  const std::size_t first = LoadFramesOf(k);
+  for (std::size_t i = 0; i < trackers_.size(); ++i) StepSet(i, k, first, state_.next_frame, state_.last[i]);
+}
+
+int SessionPlayer::StepBlock(int k, int max_samples, int jobs, std::vector<EstimateRecord>& records) {
+  INHAND_CHECK(k >= 0 && k < session_.num_samples() && max_samples >= 1 && jobs >= 1, "StepBlock: bad arguments");
+  // The block: up to the first sample that captures a frame.
+  const auto& frames = session_.camera_frames();
+  int end = k;
+  while (end < session_.num_samples() && end - k < max_samples) {
+    const bool captures = state_.next_frame < frames.size() && frames[state_.next_frame].t <= session_.t(end) + 1e-9;
+    ++end;
+    if (captures) break;
   }
+  const int count = end - k;
+  const std::size_t sets = trackers_.size();
+  records.resize(static_cast<std::size_t>(count) * sets);
+  // Only the block's last sample can capture frames: load them first, for every set.
+  const std::size_t first = state_.next_frame;
+  std::size_t first_frame = first, end_frame = first;
+  images_.clear();
+  state_.last_frame = -1;
+  if (state_.next_frame < frames.size() && frames[state_.next_frame].t <= session_.t(end - 1) + 1e-9) {
+    first_frame = LoadFramesOf(end - 1);
+    end_frame = state_.next_frame;
+  }
+  const auto run_set = [&](std::size_t i) {
+    for (int s = k; s < end; ++s) {
+      EstimateRecord& r = records[static_cast<std::size_t>(s - k) * sets + i];
+      r = state_.last[i];  // the fields a step leaves as they were
+      const bool last = s == end - 1;
+      StepSet(i, s, first_frame, last ? end_frame : first_frame, r);
+      state_.last[i] = r;
+    }
+  };
+  const int threads = std::min<int>(jobs, static_cast<int>(sets));
+  if (threads <= 1) {
+    for (std::size_t i = 0; i < sets; ++i) run_set(i);
+    return count;
+  }
+  // The heaviest sets (the last: with images) are taken first; a set runs wholly on one thread.
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  const auto worker = [&] {
+    for (std::size_t n; (n = next++) < sets;) {
+      try {
+        run_set(sets - 1 - n);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < threads; ++w) pool.emplace_back(worker);
+  worker();
+  for (std::thread& th : pool) th.join();
+  if (error) std::rethrow_exception(error);
+  return count;
 }
 
 }  // namespace inhand::app

@@ -3,6 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -50,6 +56,83 @@ struct SetStats {
   EstimateRecord last_with_truth;
 };
 
+// The annotated pictures: drawn, encoded and written in capture order, on a thread of their own
+// (jobs > 1: the player goes on meanwhile, at most `kQueued` pictures ahead) or inline.
+class Pictures {
+ public:
+  using Emit = std::function<void(FrameComposer&, const PictureState&, int)>;
+  Pictures(const SessionPlayer& player, bool threaded, Emit emit) : player_(player), emit_(std::move(emit)) {
+    if (!threaded) {
+      composer_ = std::make_unique<FrameComposer>(player_);
+      return;
+    }
+    thread_ = std::thread([this] { Loop(); });
+  }
+  ~Pictures() {
+    if (thread_.joinable()) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        done_ = true;
+      }
+      cv_.notify_all();
+      thread_.join();
+    }
+  }
+  void Add(PictureState state, int index) {
+    if (!thread_.joinable()) return emit_(*composer_, state, index);
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait(lock, [&] { return queue_.size() < kQueued || error_; });
+    if (error_) std::rethrow_exception(error_);
+    queue_.emplace_back(std::move(state), index);
+    cv_.notify_all();
+  }
+  // Waits for every picture; rethrows what went wrong on the thread.
+  void Finish() {
+    if (!thread_.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  static constexpr std::size_t kQueued = 2;
+  void Loop() {
+    try {
+      FrameComposer composer(player_);  // its GL context lives on this thread
+      for (;;) {
+        std::pair<PictureState, int> job;
+        {
+          std::unique_lock<std::mutex> lock(mutex_);
+          cv_.wait(lock, [&] { return done_ || !queue_.empty(); });
+          if (queue_.empty()) return;
+          job = std::move(queue_.front());
+          queue_.pop_front();
+          cv_.notify_all();
+        }
+        emit_(composer, job.first, job.second);
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = std::current_exception();
+      queue_.clear();
+      cv_.notify_all();
+    }
+  }
+  const SessionPlayer& player_;
+  Emit emit_;
+  std::unique_ptr<FrameComposer> composer_;  // inline
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::pair<PictureState, int>> queue_;
+  bool done_ = false;
+  std::exception_ptr error_;
+};
+
 }  // namespace
 
 int RunReplay(const ReplayCommand& cmd) {
@@ -63,8 +146,7 @@ int RunReplay(const ReplayCommand& cmd) {
   // Without a camera the video is the external 3-D view at --video-fps.
   const bool want_pictures = !cmd.no_video || cmd.frames;
   if (!(cmd.video_fps > 0.0 && cmd.video_fps <= 240.0)) throw InputError("--video-fps: expected a rate in (0, 240] Hz");
-  std::unique_ptr<FrameComposer> composer;
-  if (want_pictures) composer = std::make_unique<FrameComposer>(player);
+  if (cmd.jobs < 1 || cmd.jobs > 64) throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
   for (const std::string& w : player.input_report().Warnings(session, player.models(), player.params()))
     std::cerr << "inhand: warning: " << w << "\n";
 
@@ -83,7 +165,8 @@ int RunReplay(const ReplayCommand& cmd) {
   const double fps = !has_camera ? cmd.video_fps : frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t) : 10.0;
   double next_picture_t = n > 0 ? session.t(0) : 0.0;
   int pictures = 0;
-  const auto emit = [&](const Image8& picture, int index) {
+  const auto emit = [&](FrameComposer& composer, const PictureState& state, int index) {
+    const Image8 picture = has_camera ? composer.Compose(state) : composer.ComposeExternal(state);
     if (!cmd.no_video) {
       if (!video) video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width, picture.height);
       video->Write(picture);
@@ -94,54 +177,74 @@ int RunReplay(const ReplayCommand& cmd) {
       WriteImage((out / name).string(), picture);
     }
   };
+  std::unique_ptr<Pictures> drawn;
+  if (want_pictures) drawn = std::make_unique<Pictures>(player, cmd.jobs > 1, emit);
   std::vector<SetStats> stats(sets.size());
+  std::vector<EstimateRecord> records;
   const bool tty = ::isatty(STDERR_FILENO);
   const auto wall_start = std::chrono::steady_clock::now();
-  for (int k = 0; k < n; ++k) {
-    player.Step(k);
-    for (std::size_t i = 0; i < sets.size(); ++i) {
-      const EstimateRecord& r = player.last(i);
-      // The filter lets nothing non-finite into its state; should it ever, no output pretends
-      // otherwise.
-      if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() || !r.sigma_orientation.allFinite())
-        throw InputError(cmd.session + ": set " + sets[i].name + " has a non-finite estimate at t = " + FormatDouble(r.t) +
-                         " s (a bug: please report it with this session)");
-      const Quat q(r.T_PO.linear());
-      const Vec3& p = r.T_PO.translation();
-      csv << FormatDouble(r.t) << "," << sets[i].name;
-      for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.sigma_position.x(), r.sigma_position.y(),
-                       r.sigma_position.z(), r.sigma_orientation.x(), r.sigma_orientation.y(), r.sigma_orientation.z()})
-        csv << "," << FormatDouble(v);
-      csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
-          << "," << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "");
-      for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
-      csv << "\n";
-      SetStats& st = stats[i];
-      if (k > 0) st.step_us.push_back(r.step_time_us);
-      if (r.visual_ms >= 0.0) st.visual_ms.push_back(r.visual_ms), st.features_used += r.visual_used;
-      st.constraints += r.constraints;
-      if (std::isfinite(r.nees)) st.nees.push_back(r.nees);
-      if (std::isfinite(r.position_error)) {
-        st.sq_pos += r.position_error * r.position_error;
-        st.sq_ori += r.orientation_error * r.orientation_error;
-        ++st.with_truth;
-        st.last_with_truth = r;
-      }
+  int shown = -1;
+  for (int k = 0; k < n;) {
+    // A block of samples up to the next camera frame (or the next picture of the 3-D view).
+    int max_samples = 256;
+    if (drawn && !has_camera) {
+      int j = k;
+      while (j < n - 1 && session.t(j) < next_picture_t - 1e-9) ++j;
+      max_samples = std::min(max_samples, j - k + 1);
     }
-    if (mcap) mcap->AddSample(k);
-    // The camera frame this sample processed, if any.
-    if (const int frame = player.last_frame(); frame >= 0 && composer && has_camera) emit(composer->Compose(frame, session.t(k)), frame);
+    const int count = player.StepBlock(k, max_samples, cmd.jobs, records);
+    for (int s = k; s < k + count; ++s) {
+      const EstimateRecord* row = &records[static_cast<std::size_t>(s - k) * sets.size()];
+      for (std::size_t i = 0; i < sets.size(); ++i) {
+        const EstimateRecord& r = row[i];
+        // The filter lets nothing non-finite into its state; should it ever, no output pretends
+        // otherwise.
+        if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() || !r.sigma_orientation.allFinite())
+          throw InputError(cmd.session + ": set " + sets[i].name + " has a non-finite estimate at t = " + FormatDouble(r.t) +
+                           " s (a bug: please report it with this session)");
+        const Quat q(r.T_PO.linear());
+        const Vec3& p = r.T_PO.translation();
+        csv << FormatDouble(r.t) << "," << sets[i].name;
+        for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.sigma_position.x(), r.sigma_position.y(),
+                         r.sigma_position.z(), r.sigma_orientation.x(), r.sigma_orientation.y(), r.sigma_orientation.z()})
+          csv << "," << FormatDouble(v);
+        csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
+            << "," << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "");
+        for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
+        csv << "\n";
+        SetStats& st = stats[i];
+        if (s > 0) st.step_us.push_back(r.step_time_us);
+        if (r.visual_ms >= 0.0) st.visual_ms.push_back(r.visual_ms), st.features_used += r.visual_used;
+        st.constraints += r.constraints;
+        if (std::isfinite(r.nees)) st.nees.push_back(r.nees);
+        if (std::isfinite(r.position_error)) {
+          st.sq_pos += r.position_error * r.position_error;
+          st.sq_ori += r.orientation_error * r.orientation_error;
+          ++st.with_truth;
+          st.last_with_truth = r;
+        }
+      }
+      // Only the block's last sample captures frames; the player stands there.
+      if (mcap) mcap->AddSample(s, row, s == k + count - 1 ? player.last_frame() : -1);
+    }
+    k += count;
+    const double t = session.t(k - 1);
+    // The camera frame the block's last sample processed, if any.
+    if (const int frame = player.last_frame(); frame >= 0 && drawn && has_camera) drawn->Add(FrameComposer::Capture(player, frame, t), frame);
     // No camera: a picture of the 3-D view whenever the video's clock passes a sample.
-    if (composer && !has_camera && session.t(k) >= next_picture_t - 1e-9) {
-      emit(composer->ComposeExternal(session.t(k)), pictures++);
+    if (drawn && !has_camera && t >= next_picture_t - 1e-9) {
+      drawn->Add(FrameComposer::Capture(player, -1, t), pictures++);
       next_picture_t = session.t(0) + pictures / fps;
     }
-    if (tty && (k % 100 == 0 || k == n - 1)) {
-      const int width = 40, done = static_cast<int>(std::lround(width * double(k + 1) / n));
+    const int percent = static_cast<int>(100.0 * k / n);
+    if (tty && (percent != shown || k == n)) {
+      shown = percent;
+      const int width = 40, done = static_cast<int>(std::lround(width * double(k) / n));
       std::fprintf(stderr, "\rreplay [%s%s] %3d%%", std::string(static_cast<std::size_t>(done), '#').c_str(),
-                   std::string(static_cast<std::size_t>(width - done), ' ').c_str(), static_cast<int>(100.0 * (k + 1) / n));
+                   std::string(static_cast<std::size_t>(width - done), ' ').c_str(), percent);
     }
   }
+  if (drawn) drawn->Finish();
   if (tty) std::fprintf(stderr, "\n");
   if (video) video->Close();
   if (mcap) mcap->Close();

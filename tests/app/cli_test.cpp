@@ -256,6 +256,31 @@ TEST(Cli, ReplayIsDeterministic) {
   EXPECT_GT(read(dir / "a/estimates.csv").size(), 10000u);
 }
 
+// Issue 18: the sets in parallel and the pictures drawn beside them change nothing: estimates,
+// every frame (zero tolerance) and the MCAP export are those of the sequential run, byte for byte.
+TEST(Cli, ParallelReplayEqualsSequential) {
+  test::TempDir dir;
+  for (const char* jobs : {"1", "2"}) {
+    const test::CommandResult r =
+        test::RunInhand("replay " + ShortSession() + " --frames --mcap --jobs " + std::string(jobs) + " --out " + (dir / jobs));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const auto read = [](const std::string& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  EXPECT_EQ(read(dir / "1/estimates.csv"), read(dir / "2/estimates.csv"));
+  EXPECT_NE(read(dir / "1/estimates.csv").find(",jtf,"), std::string::npos);  // every set ran, images too
+  EXPECT_EQ(read(dir / "1/replay.mcap"), read(dir / "2/replay.mcap"));
+  const test::CommandResult same =
+      test::RunInhand("compare " + (dir / "1/frames") + " " + (dir / "2/frames") + " --max-channel-delta 0 --max-bad-fraction 0");
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_NE(same.output.find("match: 51 frame pairs compared, 0 differ"), std::string::npos) << same.output;
+  EXPECT_EQ(test::RunInhand("replay " + ShortSession() + " --jobs 0 --out " + (dir / "x")).exit_code, 2);
+}
+
 // Issue 6: fingers around a bottle leave its axis unobservable (position along it, rotation
 // about it); the paper-noise session starts 20 mm off, mostly along that axis, and the bottle
 // slips in the hand. AprilTags must recover both, which joints alone cannot. (The joints'

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "inhand/core/error.hpp"
@@ -279,6 +280,17 @@ TEST(Import, RealAllegroBagReplaysWithA3dVideo) {
   const Image8 first = ReadImage(dir / "r/frames/frame_000000.png");
   EXPECT_EQ(first.width, 960);
   EXPECT_EQ(test::RunInhand("compare " + (dir / "r/frames/frame_000000.png") + " " + (dir / "r/frames/frame_000040.png")).exit_code, 1);
+  // Sequential and parallel replays agree (the blocks end at the pictures' times).
+  const test::CommandResult one = test::RunInhand("replay " + (dir / "s") + " --out " + (dir / "r1") + " --frames --video-fps 5 --jobs 1");
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const test::CommandResult two = test::RunInhand("replay " + (dir / "s") + " --out " + (dir / "r2") + " --frames --video-fps 5 --jobs 2");
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  EXPECT_EQ(test::RunInhand("compare " + (dir / "r1/frames") + " " + (dir / "r2/frames") + " --max-channel-delta 0 --max-bad-fraction 0").exit_code, 0);
+  const auto read = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(read(dir / "r1/estimates.csv"), read(dir / "r2/estimates.csv"));
 #ifdef INHAND_WITH_GUI
   // The GUI shows the same 3-D view instead of "(no image yet)".
   const test::CommandResult gui = test::RunInhand("gui " + (dir / "s") + " --time 4 --frames 2 --screenshot " + (dir / "gui.png"), "env -u DISPLAY");

@@ -62,6 +62,7 @@ struct ReplayCommand {
   bool frames = false;     // also write each annotated frame as PNG
   double video_fps = 30.0; // sessions without a camera: the 3-D view's frame rate
   bool mcap = false;       // also write replay.mcap (Foxglove, Lichtblick)
+  int jobs = 2;            // threads: the sets in parallel, the pictures beside them (1: sequential)
 };
 int RunReplay(const ReplayCommand& cmd);
 

@@ -10,13 +10,36 @@
 
 namespace inhand::app {
 
+// What the pictures show, copied from the player after a sample: they can then be drawn on
+// another thread while the player goes on.
+struct PictureState {
+  double t = 0.0;
+  int camera_frame = -1;
+  Image8 camera;  // that frame's image
+  struct Set {
+    EstimateRecord record;
+    Mat3 position_covariance = Mat3::Zero();
+    std::vector<FilterTrace::Contact> contacts;
+    std::vector<FilterTrace::Visual> visual;
+  };
+  std::vector<Set> sets;
+  std::vector<Transform> link_poses;  // the hand as the last set believes it (biased joints)
+};
+
 class FrameComposer {
  public:
+  // Draws with its own renderer, on the thread that calls it (one at a time).
   explicit FrameComposer(const SessionPlayer& player);
-  Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {});
-  // The external 3-D view at the player's current state (hand, every set's estimate, truth,
-  // contacts, forces and a HUD), width x height pixels.
-  Image8 ComposeExternal(double t, int width = 960, int height = 720, const OverlayLayers& layers = {});
+  // The player's state now, at time t, with camera frame `camera_frame` (-1: none).
+  static PictureState Capture(const SessionPlayer& player, int camera_frame, double t);
+  Image8 Compose(const PictureState& state, const OverlayLayers& layers = {});
+  Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {}) { return Compose(Capture(p_, camera_frame, t), layers); }
+  // The external 3-D view (hand, every set's estimate, truth, contacts, forces and a HUD),
+  // width x height pixels.
+  Image8 ComposeExternal(const PictureState& state, int width = 960, int height = 720, const OverlayLayers& layers = {});
+  Image8 ComposeExternal(double t, int width = 960, int height = 720, const OverlayLayers& layers = {}) {
+    return ComposeExternal(Capture(p_, -1, t), width, height, layers);
+  }
   // The external 3-D view's orbit around the object (the GUI drags it).
   struct Orbit {
     double azimuth = -2.2;   // [rad]
@@ -26,9 +49,9 @@ class FrameComposer {
 
  private:
   // Every set's estimate with its contacts, and the HUD lines, as the overlays take them.
-  void AddEstimates(OverlayFrame* frame, double t) const;
+  void AddEstimates(OverlayFrame* frame, const PictureState& state) const;
   // The 3-D scene around the palm: hand, truth dark, estimates translucent, seen through K.
-  Scene ExternalScene(double t, const Intrinsics& K) const;
+  Scene ExternalScene(const PictureState& state, const Intrinsics& K) const;
   const SessionPlayer& p_;
   Renderer renderer_;
   HandMeshes hand_meshes_;

@@ -22,6 +22,12 @@ class SessionPlayer {
   // Feeds joint sample k to every tracker (k = 0 starts them), then the camera frames captured
   // by it.
   void Step(int k);
+  // Feeds samples k, k+1, ... to every set, up to and including the first that captures a camera
+  // frame, at most max_samples of them; returns how many. The sets run on `jobs` threads (each
+  // set on one thread at a time, every set's computation as in Step: the estimates are the
+  // same bit for bit for any jobs). Every set's record of every sample goes to `records`
+  // (sample-major: records[(s - k) * sets + i]); afterwards the player stands at the last one.
+  int StepBlock(int k, int max_samples, int jobs, std::vector<EstimateRecord>& records);
   // The camera frame the last Step processed (-1: none) and its image.
   int last_frame() const { return state_.last_frame; }
   const Image8& last_image() const { return state_.image; }
@@ -77,8 +83,16 @@ class SessionPlayer {
   std::vector<ModalitySet> sets_;
   std::vector<std::unique_ptr<Tracker>> trackers_;
   StepState state_;
-  Eigen::VectorXd q_, tau_;  // joint sample k in the hand's order
-  void Gather(int k);        // into q_, tau_
+  Eigen::VectorXd q_, tau_;  // joint sample k in the hand's order (for the report)
+  std::vector<Eigen::VectorXd> set_q_, set_tau_;  // the same per set: sets may run in parallel
+  void Gather(int k, Eigen::VectorXd& q, Eigen::VectorXd& tau) const;
+  // Set i at sample k, then the frames [first_frame, end_frame) captured by it (their images in
+  // images_); its record into r.
+  void StepSet(std::size_t i, int k, std::size_t first_frame, std::size_t end_frame, EstimateRecord& r);
+  // The frames captured by sample k from state_.next_frame on, loaded into images_; advances
+  // state_.next_frame, last_frame and image.
+  std::size_t LoadFramesOf(int k);
+  std::vector<Image8> images_;  // the images of the frames the current step fuses
   bool TruthCovers(double t) const;
   VisualStep no_features_;
   InputReport report_;
