@@ -71,24 +71,39 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
   cv::Mat img(out.height, out.width, CV_8UC3, out.data.data());
   const Transform T_CP = frame.T_PC.inverse();
 
-  // Silhouettes and outlines first, then the geometric markers on top.
-  for (const OverlayEstimate& e : frame.estimates) {
-    if (!layers.silhouette && !layers.outline) break;
-    const std::vector<std::uint8_t> mask_data = Silhouette(e.T_PO, frame.T_PC, K);
-    cv::Mat mask(K.height, K.width, CV_8UC1, const_cast<std::uint8_t*>(mask_data.data()));
+  // Silhouettes and outlines first, then the geometric markers on top. Every estimate's
+  // silhouette comes from one render (a bit each, 16 at a time); tint and contours work inside
+  // its bounding box.
+  std::vector<std::uint8_t> mask_data(static_cast<std::size_t>(K.width) * K.height);
+  const auto silhouette = [&](const OverlayEstimate& e, std::uint16_t bit) {
+    for (std::size_t p = 0; p < mask_data.size(); ++p) mask_data[p] = (masks_[p] & bit) != 0;
+    const cv::Mat mask(K.height, K.width, CV_8UC1, mask_data.data());
+    const cv::Rect box = cv::boundingRect(mask);
+    if (box.empty()) return;
     if (layers.silhouette && !e.dashed) {
-      cv::Mat tint(img.size(), CV_8UC3, Colour(e.colour));
-      cv::Mat blended;
-      cv::addWeighted(img, 0.72, tint, 0.28, 0.0, blended);
-      blended.copyTo(img, mask);
+      cv::Mat roi = img(box), blended;
+      cv::addWeighted(roi, 0.72, cv::Mat(box.size(), CV_8UC3, Colour(e.colour)), 0.28, 0.0, blended);
+      blended.copyTo(roi, mask(box));
     }
     if (layers.outline) {
       std::vector<std::vector<cv::Point>> contours;
-      cv::Mat m = mask.clone();
-      cv::findContours(m, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+      cv::findContours(mask(box).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, box.tl());
       if (e.dashed) DrawDashedContours(img, contours, Colour(e.colour));
       else cv::drawContours(img, contours, -1, Colour(e.colour), 2, cv::LINE_AA);
     }
+  };
+  for (std::size_t e0 = 0; e0 < frame.estimates.size() && (layers.silhouette || layers.outline); e0 += 16) {
+    Scene scene;
+    scene.K = K;
+    scene.T_PC = frame.T_PC;
+    const std::size_t e1 = std::min(frame.estimates.size(), e0 + 16);
+    for (std::size_t i = e0; i < e1; ++i) {
+      const std::size_t first = scene.items.size();
+      AddObject(scene, object_meshes_, frame.estimates[i].T_PO, ObjectStyle());
+      for (std::size_t k = first; k < scene.items.size(); ++k) scene.items[k].label = static_cast<std::uint16_t>(1u << (i - e0));
+    }
+    renderer_.RenderMasks(scene, masks_);
+    for (std::size_t i = e0; i < e1; ++i) silhouette(frame.estimates[i], static_cast<std::uint16_t>(1u << (i - e0)));
   }
 
   for (const OverlayEstimate& e : frame.estimates) {

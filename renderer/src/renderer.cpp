@@ -359,4 +359,47 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+void Renderer::RenderMasks(const Scene& scene, std::vector<std::uint16_t>& bits) {
+  Impl& r = *impl_;
+  r.MakeCurrent();
+  const int W = scene.K.width, H = scene.K.height;
+  r.EnsureFramebuffer(W, H);
+  glBindFramebuffer(GL_FRAMEBUFFER, r.fbo);
+  const GLenum buffers[3] = {GL_NONE, GL_COLOR_ATTACHMENT1, GL_NONE};  // the labels only
+  glDrawBuffers(3, buffers);
+  glViewport(0, 0, W, H);
+  glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  const GLuint zero_label[4] = {0, 0, 0, 0};
+  glClearBufferuiv(GL_COLOR, 1, zero_label);
+  glDisable(GL_DEPTH_TEST);
+  glDepthMask(GL_FALSE);
+  glDisable(GL_CULL_FACE);
+  glDisablei(GL_BLEND, 0);
+  glEnable(GL_COLOR_LOGIC_OP);  // integer targets: the labels are OR-ed
+  glLogicOp(GL_OR);
+  glUseProgram(r.program);
+  const Eigen::Matrix4f proj = ProjectionMatrix(scene.K, scene.near, scene.far).cast<float>();
+  glUniformMatrix4fv(r.u_proj, 1, GL_FALSE, proj.data());
+  glUniform1i(r.u_use_texture, 0);
+  glUniform1i(r.u_unlit, 1);
+  const Transform T_CP = scene.T_PC.inverse();
+  for (const SceneItem& item : scene.items) {
+    const GpuMesh& g = r.meshes.at(static_cast<std::size_t>(item.mesh));
+    const Eigen::Matrix4f model_cam = (T_CP * item.T_PM).matrix().cast<float>();
+    glUniformMatrix4fv(r.u_model_cam, 1, GL_FALSE, model_cam.data());
+    glUniform1ui(r.u_label, item.label);
+    glBindVertexArray(g.vao);
+    glDrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
+  }
+  glBindVertexArray(0);
+  glDisable(GL_COLOR_LOGIC_OP);
+  glDepthMask(GL_TRUE);
+  glEnable(GL_DEPTH_TEST);
+  bits.resize(std::size_t(W) * H);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_COLOR_ATTACHMENT1);
+  glReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, bits.data());
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
 }  // namespace inhand

@@ -195,6 +195,46 @@ TEST(Renderer, LabelImageIdentifiesTheLinks) {
   EXPECT_EQ(out.label_at(2, 2), 0);
 }
 
+// One pass for many silhouettes (the overlays' estimates): each object's bit of the OR-ed mask
+// is exactly its own silhouette rendered alone, also where the objects overlap and occlude each
+// other; pixels no object covers are 0.
+TEST(Renderer, MasksOfOverlappingObjectsInOnePassAreTheirSilhouettes) {
+  Renderer& r = SharedRenderer();
+  const ObjectModel ketchup = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  const std::vector<int> meshes = UploadObject(r, ketchup);
+  OverlayPainter painter(r, meshes);
+  Scene scene;
+  scene.K = Camera(320, 240);
+  scene.T_PC = LookAt(Vec3(0.0, 0.0, 0.4), Vec3(0, 0, 0), Vec3::UnitY());
+  std::vector<Transform> poses;
+  for (int i = 0; i < 5; ++i)  // 8 mm and 6 deg apart: they overlap
+    poses.push_back(MakeTransform(Vec3(0.008 * i, 0.003 * i, -0.01 * i), ExpSO3(Vec3(0.1 * i, 0.0, 0.05 * i))));
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const std::size_t first = scene.items.size();
+    AddObject(scene, meshes, poses[i]);
+    for (std::size_t k = first; k < scene.items.size(); ++k) scene.items[k].label = static_cast<std::uint16_t>(1u << i);
+  }
+  std::vector<std::uint16_t> bits;
+  r.RenderMasks(scene, bits);
+  ASSERT_EQ(bits.size(), 320u * 240u);
+  long overlap = 0, covered = 0;
+  std::vector<long> own(poses.size(), 0);
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const std::vector<std::uint8_t> alone = painter.Silhouette(poses[i], scene.T_PC, scene.K);
+    long differ = 0;
+    for (std::size_t p = 0; p < bits.size(); ++p) {
+      differ += ((bits[p] >> i) & 1u) != alone[p];
+      own[i] += alone[p];
+    }
+    EXPECT_EQ(differ, 0) << "object " << i;
+    EXPECT_GT(own[i], 2000) << "object " << i;
+  }
+  for (const std::uint16_t b : bits) overlap += __builtin_popcount(b) >= 2, covered += b != 0;
+  EXPECT_GT(overlap, own[0] / 2);  // the test is about overlapping objects
+  EXPECT_LT(covered, 320 * 240 / 2);
+  EXPECT_EQ(bits[0], 0);
+}
+
 TEST(Renderer, TransparentBodyLetsTheBackgroundThrough) {
   Renderer& r = SharedRenderer();
   const ObjectModel water = LoadObjectModel(test::ProjectAsset("objects/water_bottle/object.json"));

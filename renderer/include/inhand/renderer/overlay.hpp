@@ -86,6 +86,7 @@ class OverlayPainter {
   Renderer& renderer_;
   std::vector<int> object_meshes_;
   RenderOutput scratch_;
+  std::vector<std::uint16_t> masks_;
 };
 
 // Places images side by side, scaled to the first one's height, with a caption bar each.

@@ -57,6 +57,12 @@ class Renderer {
   // blended into the colour only: depth and labels belong to the opaque surfaces.
   void Render(const Scene& scene, RenderOutput& out, bool with_depth_and_labels = true);
 
+  // Coverage masks of many items in one pass: every pixel gets the bitwise OR of the labels of
+  // the items covering it, occluded or not (no depth test; give each item its own bit). Only
+  // this mask is read back (width x height, top row first): the silhouettes of up to 16 objects
+  // for the price of one render.
+  void RenderMasks(const Scene& scene, std::vector<std::uint16_t>& bits);
+
   // "OSMesa" with the GL renderer string, for logs.
   std::string Description() const;
 
