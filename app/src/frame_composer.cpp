@@ -33,7 +33,8 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
   PictureState st;
   st.t = t;
   st.camera_frame = camera_frame;
-  if (camera_frame >= 0) st.camera = p.last_frame() == camera_frame ? p.last_image() : p.session().LoadImage(camera_frame);
+  if (camera_frame >= 0)
+    st.camera = p.last_frame() == camera_frame && !p.last_image().empty() ? p.last_image() : p.session().LoadImage(camera_frame);
   for (std::size_t i = 0; i < p.sets().size(); ++i) {
     const Filter& f = p.tracker(i).filter();
     PictureState::Set set;

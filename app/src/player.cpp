@@ -120,9 +120,12 @@ std::size_t SessionPlayer::LoadFramesOf(int k) {
   const std::size_t first = state_.next_frame;
   images_.clear();
   state_.last_frame = -1;
+  // The images are read only for sets that see them (the pictures read their own).
+  bool needed = false;
+  for (const ModalitySet& s : sets_) needed = needed || s.tags || s.features;
   while (state_.next_frame < frames.size() && frames[state_.next_frame].t <= t + 1e-9) {
     state_.last_frame = static_cast<int>(state_.next_frame++);
-    images_.push_back(session_.LoadImage(state_.last_frame));
+    if (needed) images_.push_back(session_.LoadImage(state_.last_frame));
   }
   if (!images_.empty()) state_.image = images_.back();
   return first;

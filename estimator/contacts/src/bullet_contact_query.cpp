@@ -91,14 +91,16 @@ struct FieldProbe {
   struct Patch {
     Vec3 center_B;
     double radius;
-    int first, count;
+    int first, count;  // points_B (clusters: patches)
   };
   std::vector<Patch> patches;
+  std::vector<Patch> clusters;  // patches by cells of kClusterCells^3 patch cells, contiguous
   std::vector<Vec3> points_B;
 };
 
 constexpr double kSampleSpacing = 1.5e-3;  // [m] between surface samples of boxes and hulls
 constexpr double kPatchSize = 6e-3;        // [m] patch cell
+constexpr long long kClusterCells = 4;     // patch cells per cluster cell along each axis
 
 FieldProbe MakeProbe(const ConvexPiece& piece) {
   FieldProbe p;
@@ -140,15 +142,30 @@ FieldProbe MakeProbe(const ConvexPiece& piece) {
                                         static_cast<long long>(std::floor(x.z() / kPatchSize))};
     cells[cell].push_back(x);
   }
-  for (const auto& [cell, pts] : cells) {
-    FieldProbe::Patch patch;
-    patch.first = static_cast<int>(p.points_B.size());
-    patch.count = static_cast<int>(pts.size());
-    Aabb box;
-    for (const Vec3& x : pts) box.Extend(x), p.points_B.push_back(x);
-    patch.center_B = box.Center();
-    patch.radius = 0.5 * box.Size().norm();
-    p.patches.push_back(patch);
+  // Clusters of patches (their points' bounding sphere), so that a far part of a palm costs one
+  // bound instead of one per patch.
+  const auto floor_div = [](long long a, long long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
+  std::map<std::array<long long, 3>, std::vector<const std::vector<Vec3>*>> clusters;
+  for (const auto& [cell, pts] : cells)
+    clusters[{floor_div(cell[0], kClusterCells), floor_div(cell[1], kClusterCells), floor_div(cell[2], kClusterCells)}].push_back(&pts);
+  for (const auto& [key, members] : clusters) {
+    FieldProbe::Patch cluster;
+    cluster.first = static_cast<int>(p.patches.size());
+    cluster.count = static_cast<int>(members.size());
+    Aabb cluster_box;
+    for (const std::vector<Vec3>* pts : members) {
+      FieldProbe::Patch patch;
+      patch.first = static_cast<int>(p.points_B.size());
+      patch.count = static_cast<int>(pts->size());
+      Aabb box;
+      for (const Vec3& x : *pts) box.Extend(x), cluster_box.Extend(x), p.points_B.push_back(x);
+      patch.center_B = box.Center();
+      patch.radius = 0.5 * box.Size().norm();
+      p.patches.push_back(patch);
+    }
+    cluster.center_B = cluster_box.Center();
+    cluster.radius = 0.5 * cluster_box.Size().norm();
+    p.clusters.push_back(cluster);
   }
   return p;
 }
@@ -156,6 +173,7 @@ FieldProbe MakeProbe(const ConvexPiece& piece) {
 }  // namespace
 
 struct BulletContactQuery::Impl {
+  std::vector<std::pair<double, int>> patch_order;  // scratch: (lower bound, patch)
   std::vector<std::vector<Shape>> link_shapes;  // per link, possibly empty
   std::vector<Shape> object_shapes;
   std::shared_ptr<const DistanceField> field;
@@ -192,6 +210,20 @@ struct BulletContactQuery::Impl {
   // The deepest (or nearest) point of one link piece against the field, in the object frame.
   // Returns the signed distance; `x_O` is the point of the probe's core (sphere centre, segment
   // point or surface sample) where it is reached.
+  // fn(patch, lower bound) for every patch of a points probe whose lower bound on the field
+  // (at its centre less its radius, 1-Lipschitz) is at most `threshold`; clusters first.
+  template <class Fn>
+  void ForPatchesWithin(const FieldProbe& probe, const Transform& T_OL, double threshold, Fn&& fn) const {
+    for (const FieldProbe::Patch& cluster : probe.clusters) {
+      if (field->Distance(T_OL * cluster.center_B) - cluster.radius > threshold) continue;
+      for (int c = cluster.first; c < cluster.first + cluster.count; ++c) {
+        const FieldProbe::Patch& patch = probe.patches[static_cast<std::size_t>(c)];
+        const double lower = field->Distance(T_OL * patch.center_B) - patch.radius;
+        if (!(lower > threshold)) fn(c, lower);
+      }
+    }
+  }
+
   double FieldDistance(const FieldProbe& probe, const Transform& T_OL, double prune, Vec3& x_O) {
     const DistanceField& f = *field;
     switch (probe.kind) {
@@ -201,20 +233,46 @@ struct BulletContactQuery::Impl {
         return f.Distance(x_O) - probe.radius;
       case FieldProbe::Kind::kSegment: {
         ++stats.pairs_tested;
-        // Dense samples along the segment, then golden-section refinement around the best.
+        // Samples every half grid step along the segment, the least one found coarse to fine
+        // (every 8th first; a run between two is searched only if the field's 1-Lipschitz bound
+        // lets it hold a smaller value; ties go to the first sample, as in a plain scan), then a
+        // golden-section refinement around it.
         const Vec3 a = T_OL * probe.a_B, b = T_OL * probe.b_B;
         const int n = std::clamp(static_cast<int>((b - a).norm() / (0.5 * f.spacing)), 1, 128);
+        const double step = (b - a).norm() / n;
+        const auto at = [&](int i) { return f.Distance(a + (b - a) * (double(i) / n)); };
+        constexpr int kCoarse = 8;
+        double coarse[128 / kCoarse + 2];
+        int num_coarse = 0;
         double best = std::numeric_limits<double>::infinity();
         int best_i = 0;
-        for (int i = 0; i <= n; ++i) {
-          const double d = f.Distance(a + (b - a) * (double(i) / n));
-          if (d < best) best = d, best_i = i;
+        const auto offer = [&](double d, int i) {
+          if (d < best || (d == best && i < best_i)) best = d, best_i = i;
+        };
+        for (int i = 0; i <= n; i += kCoarse) offer(coarse[num_coarse++] = at(i), i);
+        if (n % kCoarse != 0) offer(coarse[num_coarse++] = at(n), n);
+        for (int c = 0; c + 1 < num_coarse; ++c) {
+          const int i0 = c * kCoarse, i1 = std::min(n, i0 + kCoarse);
+          // Between samples i0 and i1 the field is at least the larger of the two cones.
+          bool any = false;
+          for (int i = i0 + 1; i < i1 && !any; ++i)
+            any = std::max(coarse[c] - (i - i0) * step, coarse[c + 1] - (i1 - i) * step) <= best;
+          if (!any) continue;
+          for (int i = i0 + 1; i < i1; ++i)
+            if (std::max(coarse[c] - (i - i0) * step, coarse[c + 1] - (i1 - i) * step) <= best) offer(at(i), i);
         }
         double lo = std::max(0.0, (best_i - 1.0) / n), hi = std::min(1.0, (best_i + 1.0) / n);
         constexpr double kGolden = 0.6180339887498949;
-        for (int it = 0; it < 20; ++it) {
-          const double m1 = hi - kGolden * (hi - lo), m2 = lo + kGolden * (hi - lo);
-          if (f.Distance(a + (b - a) * m1) < f.Distance(a + (b - a) * m2)) hi = m2; else lo = m1;
+        double m1 = hi - kGolden * (hi - lo), m2 = lo + kGolden * (hi - lo);
+        double f1 = f.Distance(a + (b - a) * m1), f2 = f.Distance(a + (b - a) * m2);
+        for (int it = 0; it < 20; ++it) {  // one new value per iteration: the other is kept
+          if (f1 < f2) {
+            hi = m2, m2 = m1, f2 = f1;
+            m1 = hi - kGolden * (hi - lo), f1 = f.Distance(a + (b - a) * m1);
+          } else {
+            lo = m1, m1 = m2, f1 = f2;
+            m2 = lo + kGolden * (hi - lo), f2 = f.Distance(a + (b - a) * m2);
+          }
         }
         const Vec3 x = a + (b - a) * (0.5 * (lo + hi));
         const double d = f.Distance(x);
@@ -222,19 +280,27 @@ struct BulletContactQuery::Impl {
         return std::min(d, best) - probe.radius;
       }
       case FieldProbe::Kind::kPoints: {
+        // Branch and bound: the patches by their lower bound (the field at the centre less the
+        // radius), nearest first, until the bound passes the best found (or the pruning
+        // distance). Ties go to the first point in the probe's order, as in a plain scan.
+        std::vector<std::pair<double, int>>& order = patch_order;
+        order.clear();
+        ForPatchesWithin(probe, T_OL, prune, [&](int c, double lower) { order.emplace_back(lower, c); });
+        stats.pairs_skipped += static_cast<long>(probe.patches.size() - order.size());
+        std::sort(order.begin(), order.end());
         double best = std::numeric_limits<double>::infinity();
-        for (const FieldProbe::Patch& patch : probe.patches) {
-          if (f.Distance(T_OL * patch.center_B) - patch.radius > std::min(best, prune)) {
-            ++stats.pairs_skipped;
-            continue;
-          }
+        int best_index = -1;
+        std::size_t c = 0;
+        for (; c < order.size() && !(order[c].first > std::min(best, prune)); ++c) {
           ++stats.pairs_tested;
+          const FieldProbe::Patch& patch = probe.patches[static_cast<std::size_t>(order[c].second)];
           for (int i = patch.first; i < patch.first + patch.count; ++i) {
             const Vec3 x = T_OL * probe.points_B[static_cast<std::size_t>(i)];
             const double d = f.Distance(x);
-            if (d < best) best = d, x_O = x;
+            if (d < best || (d == best && i < best_index)) best = d, best_index = i, x_O = x;
           }
         }
+        stats.pairs_skipped += static_cast<long>(order.size() - c);
         return best;
       }
     }
@@ -275,8 +341,8 @@ struct BulletContactQuery::Impl {
         for (const FieldProbe& probe : link_probes[l]) {
           if (probe.kind != FieldProbe::Kind::kPoints) continue;
           if (field->Distance(T_OL * probe.center_B) - probe.bound > 0.0) continue;
-          for (const FieldProbe::Patch& patch : probe.patches) {
-            if (field->Distance(T_OL * patch.center_B) - patch.radius > 0.0) continue;
+          ForPatchesWithin(probe, T_OL, 0.0, [&](int c, double) {
+            const FieldProbe::Patch& patch = probe.patches[static_cast<std::size_t>(c)];
             for (int i = patch.first; i < patch.first + patch.count; ++i) {
               const Vec3 x = T_OL * probe.points_B[static_cast<std::size_t>(i)];
               const double d = field->Distance(x);
@@ -285,7 +351,7 @@ struct BulletContactQuery::Impl {
               field->Distance(x, &g);  // the gradient only where it counts
               sum -= d * g;
             }
-          }
+          });
         }
         if (sum.norm() > 1e-12 && best_radius == 0.0) n_O = sum.normalized();
       }

@@ -28,7 +28,8 @@ class SessionPlayer {
   // same bit for bit for any jobs). Every set's record of every sample goes to `records`
   // (sample-major: records[(s - k) * sets + i]); afterwards the player stands at the last one.
   int StepBlock(int k, int max_samples, int jobs, std::vector<EstimateRecord>& records);
-  // The camera frame the last Step processed (-1: none) and its image.
+  // The camera frame the last Step processed (-1: none) and its image (empty when no set sees
+  // images).
   int last_frame() const { return state_.last_frame; }
   const Image8& last_image() const { return state_.image; }
   // The last feature set's last visual step (virtual image, matches, residuals): for `match`
