@@ -30,8 +30,10 @@ int RunMatch(const MatchCommand& cmd) {
     player.Step(k);
     if (player.last_frame() == cmd.frame) break;
   }
-  const VisualStep& fs = player.last_feature_step();
+  // A copy, with the camera's corners for the pictures (the tracker does not compute them).
+  VisualStep fs = player.last_feature_step();
   if (player.last_frame() != cmd.frame || fs.sequence == 0) throw InputError(cmd.session + ": frame " + std::to_string(cmd.frame) + " comes after the last joint sample");
+  fs.match.debug.real_corners = EdgeCorners(fs.match.debug.real_edges, player.params().features);
   const MatchResult& r = fs.match;
   const MatchDebug& d = r.debug;
 

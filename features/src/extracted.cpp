@@ -112,8 +112,15 @@ std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p, co
 
 }  // namespace
 
+std::vector<Vec2> EdgeCorners(const Image8& edges, const FeatureParams& p) {
+  p.Validate();
+  INHAND_CHECK(edges.channels == 1, "EdgeCorners takes a grey edge image");
+  const cv::Mat m(edges.height, edges.width, CV_8UC1, const_cast<std::uint8_t*>(edges.data.data()));
+  return HarrisCorners(m, p, nullptr, nullptr);
+}
+
 MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const std::vector<std::uint8_t>* object_mask,
-                          const FeatureParams& p, const std::vector<std::uint8_t>* occluder_mask) {
+                          const FeatureParams& p, const std::vector<std::uint8_t>* occluder_mask, bool camera_corners) {
   p.Validate();
   INHAND_CHECK(real.width == virtual_image.width && real.height == virtual_image.height, "images of different sizes");
   MatchResult result;
@@ -138,7 +145,7 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     grown.assign(g.data, g.data + g.total());
   }
   // 2. Harris on the edge images.
-  dbg.real_corners = HarrisCorners(re.edges, p, nullptr, nullptr);
+  if (camera_corners) dbg.real_corners = HarrisCorners(re.edges, p, nullptr, nullptr);
   dbg.virtual_corners = HarrisCorners(ve.edges, p, object_mask ? &grown : nullptr, &dbg.virtual_corners_rejected);
   const int W = real.width, H = real.height, R = p.piece_radius, S = p.search_radius;
   // 3. Contour pieces: virtual edge pixels around each corner (offsets and orientation bins).

@@ -29,7 +29,7 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     object_mask_[i] = label[i] == kObjectLabel;
     hand_mask_[i] = label[i] >= kHandLabelBase && label[i] < kExtraLabelBase;
   }
-  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, params_, &hand_mask_);
+  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, params_, &hand_mask_, false);  // no debug-only camera corners
   // Inliers to object points through the virtual depth, moved into O with the estimate.
   const Transform T_OP = f.T_PO().inverse();
   out.clear();

@@ -72,8 +72,13 @@ struct MatchResult {
 // the virtual corners to the object; `occluder_mask` (optional, same size, non-zero on what
 // occludes it: the hand) rejects the corners within occluder_clearance of it. Images are RGB or
 // grey of the same size.
+// `camera_corners` false leaves debug.real_corners empty: the matching does not use them (the
+// tracker skips them; EdgeCorners computes them for a debug view).
 MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
                           const std::vector<std::uint8_t>* object_mask, const FeatureParams& params,
-                          const std::vector<std::uint8_t>* occluder_mask = nullptr);
+                          const std::vector<std::uint8_t>* occluder_mask = nullptr, bool camera_corners = true);
+
+// Harris corners of an edge image (grey, 255 on edges) as MatchFeatures finds them.
+std::vector<Vec2> EdgeCorners(const Image8& edges, const FeatureParams& params);
 
 }  // namespace inhand
