@@ -10,6 +10,8 @@ PACKAGES=(
   libopencv-dev libapriltag-dev libosmesa6-dev libimgui-dev libglfw3-dev libegl-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
   ffmpeg xvfb xauth imagemagick
+  # The replay video: written through FFmpeg's libraries (libx264 preset), read through OpenCV.
+  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev
   # ROS recordings (inhand import): ROS 1 bags through Debian's rosbag_storage and message
   # headers; MCAP chunk codecs and rosbag2's sqlite3 for our own ROS 2 readers.
   librosbag-storage-dev libsensor-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev libnav-msgs-dev
