@@ -392,14 +392,18 @@ DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& piece
 }
 
 double DistanceField::Distance(const Vec3& p_O) const {
-  const Vec3 u = (p_O - origin) / spacing;
-  const Vec3 hi = dims.cast<double>() - Vec3::Ones();
-  const Vec3 uc = u.cwiseMax(0.0).cwiseMin(hi);
-  const double outside = spacing * (u - uc).norm();
-  int i = std::min(static_cast<int>(uc.x()), dims[0] - 2);
-  int j = std::min(static_cast<int>(uc.y()), dims[1] - 2);
-  int k = std::min(static_cast<int>(uc.z()), dims[2] - 2);
-  const double fx = uc.x() - i, fy = uc.y() - j, fz = uc.z() - k;
+  // Grid coordinates, clamped into the grid; outside it, the distance to it is added (the
+  // square root only then: inside is the common case).
+  const double ux = (p_O.x() - origin.x()) / spacing, uy = (p_O.y() - origin.y()) / spacing, uz = (p_O.z() - origin.z()) / spacing;
+  const double cx = std::min(std::max(ux, 0.0), dims[0] - 1.0);
+  const double cy = std::min(std::max(uy, 0.0), dims[1] - 1.0);
+  const double cz = std::min(std::max(uz, 0.0), dims[2] - 1.0);
+  double outside = 0.0;
+  if (cx != ux || cy != uy || cz != uz) outside = spacing * std::sqrt((ux - cx) * (ux - cx) + (uy - cy) * (uy - cy) + (uz - cz) * (uz - cz));
+  const int i = std::min(static_cast<int>(cx), dims[0] - 2);
+  const int j = std::min(static_cast<int>(cy), dims[1] - 2);
+  const int k = std::min(static_cast<int>(cz), dims[2] - 2);
+  const double fx = cx - i, fy = cy - j, fz = cz - k;
   const std::size_t sx = 1, sy = static_cast<std::size_t>(dims[0]), sz = sy * static_cast<std::size_t>(dims[1]);
   const float* v = values.data() + k * sz + j * sy + i * sx;
   const double c00 = v[0] + fx * (v[sx] - v[0]);
