@@ -44,7 +44,13 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
     set.visual = f.trace().visual;
     st.sets.push_back(std::move(set));
   }
-  st.link_poses = p.tracker(p.sets().size() - 1).filter().kinematics().link_poses();
+  const std::size_t last = p.sets().size() - 1;
+  st.link_poses = p.tracker(last).filter().kinematics().link_poses();
+  if (camera_frame >= 0 && p.sets()[last].features) {
+    const VisualStep& v = p.tracker(last).last_visual();
+    const double t_frame = p.session().camera_frames().at(static_cast<std::size_t>(camera_frame)).t;
+    if (v.sequence > 0 && v.has_features && v.t_capture == t_frame) st.matched_view = v.virtual_view.colour;
+  }
   return st;
 }
 
@@ -107,18 +113,24 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   AddEstimates(&of, st);
   const Image8 annotated = painter_->Paint(of, layers);
 
-  // The virtual view: the scene as the last set believes it, from the camera.
+  // The virtual view: the scene as the last set believes it, from the camera; when it matched
+  // features on this frame, the very image it matched them against.
   const std::size_t last = p_.sets().size() - 1;
   RenderOutput virtual_out;
-  renderer_.Render(CameraScene(hand_meshes_, st.link_poses, object_meshes_, st.sets.back().record.T_PO, frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),
-                   virtual_out, false);
+  std::string virtual_caption = "virtual view at " + p_.sets()[last].name + " estimate";
+  if (!st.matched_view.empty()) {
+    virtual_out.colour = st.matched_view;
+    virtual_caption = "virtual view " + p_.sets()[last].name + " matched (estimate before the update)";
+  } else {
+    renderer_.Render(CameraScene(hand_meshes_, st.link_poses, object_meshes_, st.sets.back().record.T_PO, frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),
+                     virtual_out, false);
+  }
 
   // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
   RenderOutput orbit_out;
   renderer_.Render(ExternalScene(st, K), orbit_out, false);
   return SideBySide({&annotated, &virtual_out.colour, &orbit_out.colour},
-                    {"camera + estimates (truth dashed)", "virtual view at " + p_.sets()[last].name + " estimate",
-                     "3-D view: truth dark, estimates translucent"});
+                    {"camera + estimates (truth dashed)", virtual_caption, "3-D view: truth dark, estimates translucent"});
 }
 
 Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height, const OverlayLayers& layers) {

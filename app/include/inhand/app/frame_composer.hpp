@@ -24,6 +24,9 @@ struct PictureState {
   };
   std::vector<Set> sets;
   std::vector<Transform> link_poses;  // the hand as the last set believes it (biased joints)
+  // The last set's virtual image of this frame when it matched features on it (rendered at its
+  // estimate before the update): the middle panel, instead of rendering one more.
+  Image8 matched_view;
 };
 
 class FrameComposer {
