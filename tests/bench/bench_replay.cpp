@@ -82,15 +82,23 @@ BENCHMARK(BM_Replay_JJt_NoVideo_JobsCores)->Unit(benchmark::kSecond)->UseRealTim
 // its state captured, overlays painted, virtual and 3-D views rendered, placed side by side and
 // encoded (H.264, 1920x480). The encoder gets the 51 frames of the session in turn, so that it
 // codes real motion.
-void BM_ComposeAndEncodeFrame1920x480(benchmark::State& state) {
-  const Session s = Session::Load(DemoSession());
-  app::SessionPlayer player(s, TrackerParams());
+// The player after the whole demo session, with the pictures' state at each camera frame.
+struct Played {
+  Session session = Session::Load(DemoSession());
+  app::SessionPlayer player{session, TrackerParams()};
   std::vector<app::PictureState> pictures;
-  for (int k = 0; k < s.num_samples(); ++k) {
-    player.Step(k);
-    if (player.last_frame() >= 0) pictures.push_back(app::FrameComposer::Capture(player, player.last_frame(), s.t(k)));
+  Played() {
+    for (int k = 0; k < session.num_samples(); ++k) {
+      player.Step(k);
+      if (player.last_frame() >= 0) pictures.push_back(app::FrameComposer::Capture(player, player.last_frame(), session.t(k)));
+    }
   }
-  app::FrameComposer composer(player);
+};
+
+void BM_ComposeAndEncodeFrame1920x480(benchmark::State& state) {
+  const Played played;
+  const std::vector<app::PictureState>& pictures = played.pictures;
+  app::FrameComposer composer(played.player);
   const std::string path = (fs::temp_directory_path() / "inhand_bench_compose.mp4").string();
   std::unique_ptr<VideoWriter> video;
   std::size_t i = 0;
@@ -105,14 +113,9 @@ void BM_ComposeAndEncodeFrame1920x480(benchmark::State& state) {
 BENCHMARK(BM_ComposeAndEncodeFrame1920x480)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ComposeFrame1920x480_NoEncoding(benchmark::State& state) {
-  const Session s = Session::Load(DemoSession());
-  app::SessionPlayer player(s, TrackerParams());
-  std::vector<app::PictureState> pictures;
-  for (int k = 0; k < s.num_samples(); ++k) {
-    player.Step(k);
-    if (player.last_frame() >= 0) pictures.push_back(app::FrameComposer::Capture(player, player.last_frame(), s.t(k)));
-  }
-  app::FrameComposer composer(player);
+  const Played played;
+  const std::vector<app::PictureState>& pictures = played.pictures;
+  app::FrameComposer composer(played.player);
   std::size_t i = 0;
   for (auto _ : state) benchmark::DoNotOptimize(composer.Compose(pictures[i++ % pictures.size()]).data.data());
 }
