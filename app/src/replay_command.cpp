@@ -4,16 +4,16 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <deque>
 #include <exception>
-#include <functional>
-#include <mutex>
-#include <thread>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
+#include <functional>
 #include <iomanip>
+#include <iostream>
+#include <mutex>
+#include <thread>
 
 #include "inhand/app/commands.hpp"
 #include "inhand/app/frame_composer.hpp"
@@ -68,11 +68,12 @@ class Pictures {
     }
     thread_ = std::thread([this] { Loop(); });
   }
-  ~Pictures() {
+  ~Pictures() {  // without Finish (the replay failed): the pictures not drawn yet are dropped
     if (thread_.joinable()) {
       {
         std::lock_guard<std::mutex> lock(mutex_);
         done_ = true;
+        queue_.clear();
       }
       cv_.notify_all();
       thread_.join();
