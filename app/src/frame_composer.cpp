@@ -117,19 +117,19 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   // features on this frame, the very image it matched them against.
   const std::size_t last = p_.sets().size() - 1;
   RenderOutput virtual_out;
-  std::string virtual_caption = "virtual view at " + p_.sets()[last].name + " estimate";
-  if (!st.matched_view.empty()) {
-    virtual_out.colour = st.matched_view;
-    virtual_caption = "virtual view " + p_.sets()[last].name + " matched (estimate before the update)";
-  } else {
+  const Image8* middle = &st.matched_view;
+  std::string virtual_caption = "virtual view " + p_.sets()[last].name + " matched (estimate before the update)";
+  if (middle->empty()) {
     renderer_.Render(CameraScene(hand_meshes_, st.link_poses, object_meshes_, st.sets.back().record.T_PO, frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),
                      virtual_out, false);
+    middle = &virtual_out.colour;
+    virtual_caption = "virtual view at " + p_.sets()[last].name + " estimate";
   }
 
   // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
   RenderOutput orbit_out;
   renderer_.Render(ExternalScene(st, K), orbit_out, false);
-  return SideBySide({&annotated, &virtual_out.colour, &orbit_out.colour},
+  return SideBySide({&annotated, middle, &orbit_out.colour},
                     {"camera + estimates (truth dashed)", virtual_caption, "3-D view: truth dark, estimates translucent"});
 }
 

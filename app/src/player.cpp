@@ -188,14 +188,7 @@ int SessionPlayer::StepBlock(int k, int max_samples, int jobs, std::vector<Estim
   const std::size_t sets = trackers_.size();
   records.resize(static_cast<std::size_t>(count) * sets);
   // Only the block's last sample can capture frames: load them first, for every set.
-  const std::size_t first = state_.next_frame;
-  std::size_t first_frame = first, end_frame = first;
-  images_.clear();
-  state_.last_frame = -1;
-  if (state_.next_frame < frames.size() && frames[state_.next_frame].t <= session_.t(end - 1) + 1e-9) {
-    first_frame = LoadFramesOf(end - 1);
-    end_frame = state_.next_frame;
-  }
+  const std::size_t first_frame = LoadFramesOf(end - 1), end_frame = state_.next_frame;
   const auto run_set = [&](std::size_t i) {
     for (int s = k; s < end; ++s) {
       EstimateRecord& r = records[static_cast<std::size_t>(s - k) * sets + i];

@@ -207,9 +207,6 @@ struct BulletContactQuery::Impl {
     return pair;
   }
 
-  // The deepest (or nearest) point of one link piece against the field, in the object frame.
-  // Returns the signed distance; `x_O` is the point of the probe's core (sphere centre, segment
-  // point or surface sample) where it is reached.
   // fn(patch, lower bound) for every patch of a points probe whose lower bound on the field
   // (at its centre less its radius, 1-Lipschitz) is at most `threshold`; clusters first.
   template <class Fn>
@@ -224,6 +221,9 @@ struct BulletContactQuery::Impl {
     }
   }
 
+  // The deepest (or nearest) point of one link piece against the field, in the object frame.
+  // Returns the signed distance; `x_O` is the point of the probe's core (sphere centre, segment
+  // point or surface sample) where it is reached.
   double FieldDistance(const FieldProbe& probe, const Transform& T_OL, double prune, Vec3& x_O) {
     const DistanceField& f = *field;
     switch (probe.kind) {
@@ -254,10 +254,6 @@ struct BulletContactQuery::Impl {
         for (int c = 0; c + 1 < num_coarse; ++c) {
           const int i0 = c * kCoarse, i1 = std::min(n, i0 + kCoarse);
           // Between samples i0 and i1 the field is at least the larger of the two cones.
-          bool any = false;
-          for (int i = i0 + 1; i < i1 && !any; ++i)
-            any = std::max(coarse[c] - (i - i0) * step, coarse[c + 1] - (i1 - i) * step) <= best;
-          if (!any) continue;
           for (int i = i0 + 1; i < i1; ++i)
             if (std::max(coarse[c] - (i - i0) * step, coarse[c + 1] - (i1 - i) * step) <= best) offer(at(i), i);
         }
