@@ -35,7 +35,11 @@ int main(int argc, char** argv) {
   simulate_cmd->add_option("SCENARIO", simulate.scenario, "scenario name (--list shows them)");
   simulate_cmd->add_option("--out", simulate.out, "session directory to write");
   simulate_cmd->add_option("--seed", simulate.seed, "random seed (noise, biases, initial error)")->capture_default_str();
-  simulate_cmd->add_option("--noise", simulate.noise, "noise profile: none, paper or hard")->capture_default_str();
+  simulate_cmd->add_option("--noise", simulate.noise, "noise profile: none, paper, hard or realistic")->capture_default_str();
+  simulate_cmd->add_option("--effects", simulate.effects,
+                           "realism effects to simulate, comma-separated (object, hand, torque, camera, all or one such as camera.jpeg; "
+                           "default: all for realistic, none otherwise)");
+  simulate_cmd->add_option("--without", simulate.without, "realism effects to leave out, comma-separated");
   simulate_cmd->add_flag("--list", simulate.list, "list the scenarios");
   simulate_cmd->add_flag("--overwrite", simulate.overwrite, "replace an existing session directory");
   simulate_cmd->add_flag("--no-images", simulate.no_images, "joints and ground truth only (fast)");
@@ -95,7 +99,8 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("--out", evaluate.out, "output directory")->required();
   evaluate_cmd->add_option("--scenarios", evaluate.scenarios, "comma-separated scenarios (default: all)");
   evaluate_cmd->add_option("--seeds", evaluate.seeds, "seeds per scenario")->capture_default_str();
-  evaluate_cmd->add_option("--noise", evaluate.noise, "noise profile: paper or hard")->capture_default_str();
+  evaluate_cmd->add_option("--noise", evaluate.noise, "noise profile: paper, hard or realistic")->capture_default_str();
+  evaluate_cmd->add_option("--first-seed", evaluate.first_seed, "first seed (seeds first..first+N-1; tuned on 1-5, 101 and up unseen)")->capture_default_str();
   evaluate_cmd->add_option("--jobs", evaluate.jobs, "runs in parallel")->capture_default_str();
   evaluate_cmd->add_option("--modalities", evaluate.modalities, "comma-separated sets, as for replay")->capture_default_str();
   evaluate_cmd->add_flag("--plan", evaluate.plan, "write plan.txt (one command per run) and stop");

@@ -23,6 +23,12 @@ int RunSimulate(const SimulateCommand& cmd) {
   options.noise = ParseNoiseProfile(cmd.noise);
   options.overwrite = cmd.overwrite;
   options.images = !cmd.no_images;
+  if (!cmd.effects.empty() || !cmd.without.empty()) {
+    Effects e = cmd.effects.empty() ? (options.noise == NoiseProfile::kRealistic ? Effects::All() : Effects::None())
+                                    : Effects::Parse(cmd.effects, "--effects");
+    if (!cmd.without.empty()) e = e.Without(Effects::Parse(cmd.without, "--without"));
+    options.effects = e;
+  }
   const SimulationSummary s = Simulate(options);
   std::cout << std::fixed << std::setprecision(3) << "session " << s.session_dir << ": " << s.duration << " s simulated in "
             << s.wall_time << " s (" << s.wall_time / s.duration << "x real time), " << s.joint_samples
@@ -31,6 +37,12 @@ int RunSimulate(const SimulateCommand& cmd) {
             << 100 * s.held_fraction << " % of the time after the grasp, in-hand rotation " << s.tilt_in_hand_deg
             << " deg at the end (max " << s.max_in_hand_rotation_deg << "), travel before the grasp "
             << s.table_travel_before_grasp * 1000 << " mm, lifted " << s.lift_height * 1000 << " mm\n";
+  if (options.effects ? options.effects->Any() : options.noise == NoiseProfile::kRealistic) {
+    const std::vector<std::string> names = (options.effects ? *options.effects : Effects::All()).Names();
+    std::cout << "realism effects:";
+    for (const std::string& n : names) std::cout << " " << n;
+    std::cout << "\n";
+  }
   return 0;
 }
 

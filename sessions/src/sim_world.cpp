@@ -117,7 +117,8 @@ struct World::Impl {
 };
 
 World::World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
-             const Transform& T_WP0, const Eigen::VectorXd& q0, const std::vector<std::pair<Transform, Vec3>>& props)
+             const Transform& T_WP0, const Eigen::VectorXd& q0, const std::vector<std::pair<Transform, Vec3>>& props,
+             double pad_stiffness, double pad_damping)
     : impl_(std::make_unique<Impl>(hand)) {
   Impl& w = *impl_;
   w.world.setGravity(btVector3(0, 0, -9.81));
@@ -192,7 +193,7 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
     const int link = next++;
     w.link_of[static_cast<std::size_t>(joint.child_link)] = link;
     const int parent = w.link_of[static_cast<std::size_t>(joint.parent_link)];
-    const double mass = 0.02;
+    const double mass = kLinkMass;
     const btQuaternion rot = BtQ(joint.T_LJ.linear().transpose());
     const btVector3 offset = Bt(joint.T_LJ.translation());
     if (joint.type == JointType::kFixed) {
@@ -221,6 +222,9 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
     collider->setCollisionShape(c);
     collider->setFriction(friction_links);
     collider->setUserIndex(static_cast<int>(l));
+    const bool fingertip = std::none_of(hand.joints.begin(), hand.joints.end(),
+                                        [&](const Joint& j) { return j.parent_link == static_cast<int>(l) && j.moves(); });
+    if (pad_stiffness > 0 && fingertip) collider->setContactStiffnessAndDamping(pad_stiffness, pad_damping);
     w.world.addCollisionObject(collider.get(), btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter);
     w.mb->getLink(link).m_collider = collider.get();
     w.colliders.push_back(std::move(collider));

@@ -12,6 +12,8 @@
 
 namespace inhand::sim {
 
+constexpr double kLinkMass = 0.02;  // [kg] of every hand link in the simulation
+
 struct LinkContact {
   int link = -1;
   Vec3 point_W = Vec3::Zero();   // on the link
@@ -21,10 +23,13 @@ struct LinkContact {
 
 class World {
  public:
-  // `props`: static boxes (pose, half extents) on the table.
+  // `props`: static boxes (pose, half extents) on the table. `pad_stiffness` > 0: the fingertip
+  // links (those without moving child joints) touch through a compliant pad of that stiffness [N/m]
+  // and damping [N s/m] instead of rigidly.
   World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
         const Transform& T_WP0, const Eigen::VectorXd& q0,
-        const std::vector<std::pair<Transform, Vec3>>& props = {});
+        const std::vector<std::pair<Transform, Vec3>>& props = {}, double pad_stiffness = 0.0,
+        double pad_damping = 0.0);
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;

@@ -1,6 +1,7 @@
 #include "inhand/sessions/simulator.hpp"
 
 #include <chrono>
+#include <deque>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include "inhand/renderer/views.hpp"
 #include "inhand/sessions/session.hpp"
 #include "inhand/sessions/output_folder.hpp"
+#include "inhand/sessions/camera_sim.hpp"
 #include "scenarios.hpp"
 #include "sim_world.hpp"
 
@@ -31,7 +33,8 @@ NoiseProfile ParseNoiseProfile(const std::string& name) {
   if (name == "none") return NoiseProfile::kNone;
   if (name == "paper") return NoiseProfile::kPaper;
   if (name == "hard") return NoiseProfile::kHard;
-  throw InputError("noise profile '" + name + "' is unknown, expected none, paper or hard");
+  if (name == "realistic") return NoiseProfile::kRealistic;
+  throw InputError("noise profile '" + name + "' is unknown, expected none, paper, hard or realistic");
 }
 
 const char* NoiseProfileName(NoiseProfile p) {
@@ -39,6 +42,7 @@ const char* NoiseProfileName(NoiseProfile p) {
     case NoiseProfile::kNone: return "none";
     case NoiseProfile::kPaper: return "paper";
     case NoiseProfile::kHard: return "hard";
+    case NoiseProfile::kRealistic: return "realistic";
   }
   return "?";
 }
@@ -192,12 +196,46 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   const std::string assets = AssetDir();
   const fs::path hand_dir = fs::path(assets) / "hands" / "inhand_hand";
   const fs::path object_dir = fs::path(assets) / "objects" / scenario->object;
-  const HandModel hand = LoadHandModel((hand_dir / "inhand_hand.urdf").string());
-  const ObjectModel object = LoadObjectModel((object_dir / "object.json").string());
-  const int m = hand.num_q();
+  // The estimator's models (copied into the session) and the world's (realism.hpp: not the
+  // same under the `realistic` profile).
+  const HandModel model_hand = LoadHandModel((hand_dir / "inhand_hand.urdf").string());
+  const ObjectModel model_object = LoadObjectModel((object_dir / "object.json").string());
+  const int m = model_hand.num_q();
   const Noise noise = NoiseFor(opt.noise);
+  const Effects effects = opt.effects ? *opt.effects : opt.noise == NoiseProfile::kRealistic ? Effects::All() : Effects::None();
+  const RealismParams& rp = opt.realism;
   std::mt19937 rng(opt.seed * 7919u + 17u);
   std::normal_distribution<double> gauss(0.0, 1.0);
+  // Each effect draws from its own stream, so switching one leaves the others' draws alone.
+  const auto effect_rng = [&](Effect e) {
+    std::seed_seq seq{opt.seed, 0x5eedu, static_cast<unsigned>(e)};
+    return std::mt19937(seq);
+  };
+  Vec3 object_scale = Vec3::Ones(), colour_gains = Vec3::Ones();
+  ObjectModel object = model_object;
+  if (effects.Has(Effect::kObjectScale)) {
+    std::mt19937 r = effect_rng(Effect::kObjectScale);
+    for (int a = 0; a < 3; ++a) object_scale[a] = 1.0 + rp.scale_sigma * gauss(r);
+    object = ScaledObject(model_object, object_scale);
+  }
+  if (effects.Has(Effect::kObjectTags)) {
+    std::mt19937 r = effect_rng(Effect::kObjectTags);
+    MisplaceTags(object, rp.tag_position, rp.tag_orientation, r);
+  }
+  if (effects.Has(Effect::kObjectColour)) {
+    std::mt19937 r = effect_rng(Effect::kObjectColour);
+    for (int c = 0; c < 3; ++c) colour_gains[c] = 1.0 + rp.colour_sigma * gauss(r);
+    TintObject(object, colour_gains);
+  }
+  std::vector<Vec3> joint_origin_offsets;
+  HandModel hand = model_hand;
+  if (effects.Has(Effect::kHandGeometry)) {
+    std::mt19937 r = effect_rng(Effect::kHandGeometry);
+    hand = PerturbedHand(model_hand, rp.joint_origin_sigma, r, &joint_origin_offsets);
+  }
+  std::mt19937 torque_rng = effect_rng(Effect::kTorqueDrift);
+  TorqueErrors torque_errors(m, rp, effects, torque_rng);
+  const bool camera_sim = opt.images && effects.AnyCamera();
 
   // Constant errors of this session: joint biases, hand-eye calibration, initial estimate.
   Eigen::VectorXd bias(m);
@@ -230,7 +268,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   const Transform T_WO0 = scenario->T_WO;
   std::vector<std::pair<Transform, Vec3>> props;
   for (const sim::Scenario::Prop& p : scenario->props) props.emplace_back(p.T_W, p.half_extents);
-  sim::World world(hand, object, T_WO0, 1.5, sim::PalmAt(*scenario, 0.0), q, props);  // rubber-like fingers
+  sim::World world(hand, object, T_WO0, 1.5, sim::PalmAt(*scenario, 0.0), q, props,  // rubber-like fingers
+                   effects.Has(Effect::kHandPads) ? rp.pad_stiffness : 0.0, rp.pad_damping);
   place_links(sim::PalmAt(*scenario, 0.0));
 
   // Camera fixed in the world, looking at the workspace.
@@ -241,6 +280,23 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   K.cx = 0.5 * opt.image_width - 0.5;
   K.cy = 0.5 * opt.image_height - 0.5;
   const Transform T_WC = LookAt(scenario->camera_eye, scenario->camera_target, Vec3::UnitZ());
+  // What the session says about the camera: with camera.intrinsics / camera.distortion, not
+  // the truth (the true K renders; its distortion is the lens').
+  Intrinsics K_session = K, K_lens = K;
+  if (effects.Has(Effect::kCameraDistortion)) {
+    std::mt19937 r = effect_rng(Effect::kCameraDistortion);
+    for (std::size_t i = 0; i < 5; ++i) {
+      K_lens.distortion[i] = rp.distortion[i];
+      K_session.distortion[i] = rp.distortion[i] * (1.0 + rp.distortion_error * gauss(r));
+    }
+  }
+  if (effects.Has(Effect::kCameraIntrinsics)) {
+    std::mt19937 r = effect_rng(Effect::kCameraIntrinsics);
+    K_session.fx *= 1.0 + rp.intrinsics_scale_sigma * gauss(r);
+    K_session.fy *= 1.0 + rp.intrinsics_scale_sigma * gauss(r);
+    K_session.cx += rp.intrinsics_centre_sigma * gauss(r);
+    K_session.cy += rp.intrinsics_centre_sigma * gauss(r);
+  }
 
   std::unique_ptr<Renderer> renderer;
   Scene world_scene;
@@ -284,13 +340,23 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       world_scene.items.push_back({id, MakeTransform(where, ExpSO3(Vec3(0, 0, 0.4 * i))), static_cast<std::uint16_t>(kExtraLabelBase + 2 + i), std::nullopt, 1.0, false});
     }
   }
+  std::unique_ptr<CameraSimulator> camera;
+  LightRig light;
+  if (camera_sim) {
+    light.lamp = scenario->camera_target + Vec3(0.45, -0.35, 0.85);
+    light.lamp_target = scenario->camera_target;
+    camera = std::make_unique<CameraSimulator>(*renderer, K_lens, rp, effects, light, opt.seed * 31337u + 5u);
+  }
+  // The world over the last exposure (motion blur): link poses and object pose per physics step.
+  const int exposure_steps = effects.Has(Effect::kCameraMotionBlur) ? std::max(0, static_cast<int>(std::lround(rp.exposure_time / dt))) : 0;
+  std::deque<std::pair<std::vector<Transform>, Transform>> recent;
 
   // Session metadata.
   SessionInfo info;
   info.name = scenario->name + "-seed" + std::to_string(opt.seed) + "-" + NoiseProfileName(opt.noise);
   info.hand_urdf = "model/hand/inhand_hand.urdf";
   info.object = "model/object/object.json";
-  if (opt.images) info.camera = K;
+  if (opt.images) info.camera = K_session;
   // The recording starts when the hand is in place around the object (as with a real robot,
   // whose estimator is seeded by a vision system before the manipulation): the initial estimate
   // is the truth at that moment, off by the profile's error.
@@ -320,8 +386,35 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
                               {"hand_eye_position_m", noise.hand_eye_position},
                               {"hand_eye_orientation_rad", noise.hand_eye_orientation},
                               {"pixel_sigma", noise.pixel_sigma},
-                              {"blur_sigma_px", noise.blur_sigma},
-                              {"occluders", noise.occluders}}}};
+                              {"blur_sigma_px", camera_sim ? 0.0 : noise.blur_sigma},
+                              {"pixel_sigma_effective", camera_sim ? 0.0 : noise.pixel_sigma},
+                              {"occluders", noise.occluders},
+                              {"effects", effects.Names()}}}};
+  if (effects.Any())
+    provenance["realism"] = {{"scale_sigma", rp.scale_sigma},
+                             {"tag_position_m", rp.tag_position},
+                             {"tag_orientation_rad", rp.tag_orientation},
+                             {"colour_sigma", rp.colour_sigma},
+                             {"joint_origin_sigma_m", rp.joint_origin_sigma},
+                             {"joint_stiffness_Nm_per_rad", rp.joint_stiffness},
+                             {"pad_stiffness_N_per_m", rp.pad_stiffness},
+                             {"pad_damping_Ns_per_m", rp.pad_damping},
+                             {"torque_drift_sigma_Nm", rp.drift_sigma},
+                             {"torque_drift_time_s", rp.drift_time},
+                             {"friction_residue_Nm", rp.friction_residue},
+                             {"gravity_residue", rp.gravity_residue},
+                             {"torque_lag_s", rp.torque_lag},
+                             {"intrinsics_scale_sigma", rp.intrinsics_scale_sigma},
+                             {"intrinsics_centre_sigma_px", rp.intrinsics_centre_sigma},
+                             {"distortion_error", rp.distortion_error},
+                             {"exposure_sigma", rp.exposure_sigma},
+                             {"white_balance_sigma", rp.white_balance_sigma},
+                             {"vignetting", rp.vignetting},
+                             {"exposure_time_s", rp.exposure_time},
+                             {"blur_subframes", rp.blur_subframes},
+                             {"full_well_e", rp.full_well},
+                             {"read_noise_e", rp.read_noise},
+                             {"jpeg_quality", rp.jpeg_quality}};
   std::unique_ptr<SessionWriter> writer;
   const auto start_recording = [&](const Transform& T_WP_now, const Transform& T_PO_now) {
     T_PO0 = T_PO_now;
@@ -331,7 +424,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
                                       ExpSO3(start_error.second * error_axis) * T_PO0.linear());
     provenance["record_start"] = record_start;
     info.provenance_json = provenance.dump();
-    writer = std::make_unique<SessionWriter>(opt.out_dir, info, hand.QNames(), opt.overwrite);
+    writer = std::make_unique<SessionWriter>(opt.out_dir, info, model_hand.QNames(), opt.overwrite);
     CopyFolder(*writer, hand_dir, "model/hand");
     CopyFolder(*writer, object_dir, "model/object");
   };
@@ -339,8 +432,12 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   // Truth for diagnostics and the plausibility checks.
   BulletContactQuery truth_contacts(hand, object);
   std::vector<ContactPair> pairs;
-  std::ostringstream contacts_csv;
+  std::ostringstream contacts_csv, joints_true_csv;
   contacts_csv << "t,link,distance,force\n";
+  joints_true_csv << "t";
+  for (const std::string& name : model_hand.QNames()) joints_true_csv << "," << name;
+  joints_true_csv << "\n";
+  Eigen::VectorXd q_prev = q, tau_gravity = Eigen::VectorXd::Zero(m);
   SimulationSummary summary;
   summary.session_dir = opt.out_dir;
   summary.duration = duration;
@@ -377,6 +474,19 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       tau_contact += J.transpose() * (T_PW.linear() * c.force_W);
     }
     tau_filtered += (dt / (dt + 0.005)) * (tau_contact - tau_filtered);
+    // The fingers' gravity torque (the simulator's link masses), whose estimate a real torque
+    // estimate subtracts imperfectly.
+    if (effects.Has(Effect::kTorqueResidue)) {
+      tau_gravity.setZero();
+      const Vec3 g_P = T_PW.linear() * Vec3(0, 0, -9.81 * sim::kLinkMass);
+      for (std::size_t l = 0; l < hand.links.size(); ++l) {
+        if (static_cast<int>(l) == hand.root_link) continue;
+        PointJacobian(hand, kin, static_cast<int>(l), kin.T_PL(static_cast<int>(l)).translation(), J);
+        tau_gravity -= J.transpose() * g_P;  // what the motors hold against gravity
+      }
+    }
+    const Eigen::VectorXd tau_estimate = torque_errors.Step(dt, tau_filtered, (q - q_prev) / dt, tau_gravity);
+    q_prev = q;
 
     const Transform T_WO = world.ObjectPose();
     const Transform T_PO = T_PW * T_WO;
@@ -387,10 +497,15 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     if (recording && k % joint_every == 0) {
       Eigen::VectorXd q_meas(m), tau_meas(m);
       for (int j = 0; j < m; ++j) {
-        q_meas[j] = q[j] - bias[j] + noise.joint_sigma * gauss(rng);
-        tau_meas[j] = tau_filtered[j] + noise.torque_sigma * gauss(rng);
+        // The encoder reads the motor side: ahead of the link by the load over the stiffness.
+        const double deflection = effects.Has(Effect::kHandDeflection) ? tau_filtered[j] / rp.joint_stiffness : 0.0;
+        q_meas[j] = q[j] + deflection - bias[j] + noise.joint_sigma * gauss(rng);
+        tau_meas[j] = tau_estimate[j] + noise.torque_sigma * gauss(rng);
       }
       writer->AddJointSample(t, q_meas, tau_meas);
+      joints_true_csv << FormatDouble(t);
+      for (int j = 0; j < m; ++j) joints_true_csv << "," << FormatDouble(q[j]);
+      joints_true_csv << "\n";
       writer->AddGroundTruth(t, T_PO);
       ++summary.joint_samples;
       // Truth checks with the estimator's own GJK on the true configuration.
@@ -417,7 +532,27 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
         held += touching >= 2;
       }
     }
-    if (recording && opt.images && k % camera_every == 0) {
+    if (camera) {
+      recent.emplace_back(T_WL, T_WO);
+      while (static_cast<int>(recent.size()) > exposure_steps + 1) recent.pop_front();
+    }
+    if (recording && camera && k % camera_every == 0) {
+      // Sub-frames spread over the exposure, ending now.
+      std::vector<Scene> subframes;
+      const int count = exposure_steps > 0 ? std::max(1, rp.blur_subframes) : 1;
+      for (int i = 0; i < count; ++i) {
+        const int back = count > 1 ? static_cast<int>(std::lround(double(exposure_steps) * (count - 1 - i) / (count - 1))) : 0;
+        const auto& [links, T_WO_then] = recent[recent.size() - 1 - std::min<std::size_t>(back, recent.size() - 1)];
+        Scene scene = world_scene;
+        AddHand(scene, hand_meshes, links);
+        AddObject(scene, object_meshes, T_WO_then);
+        subframes.push_back(std::move(scene));
+      }
+      Image8 image;
+      camera->Capture(subframes, image);
+      writer->AddCameraFrame(t, image, T_PW * T_WC * hand_eye_error);
+      ++summary.camera_frames;
+    } else if (recording && opt.images && k % camera_every == 0) {
       Scene scene = world_scene;
       AddHand(scene, hand_meshes, T_WL);
       AddObject(scene, object_meshes, T_WO);
@@ -443,6 +578,29 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
 
   jsonf::Json biases = jsonf::Json::object();
   for (int j = 0; j < m; ++j) biases[hand.joints[hand.q_joints[j]].name] = bias[j];
+  jsonf::Json realism = {{"effects", effects.Names()}};
+  if (effects.Has(Effect::kObjectScale)) realism["object_scale"] = {object_scale.x(), object_scale.y(), object_scale.z()};
+  if (effects.Has(Effect::kObjectColour)) realism["colour_gains_rgb"] = {colour_gains.x(), colour_gains.y(), colour_gains.z()};
+  if (effects.Has(Effect::kObjectTags)) {
+    jsonf::Json tags = jsonf::Json::array();
+    for (const TagPlacement& t : object.tags) tags.push_back({{"id", t.id}, {"true_pose", jsonf::PoseToJson(t.T_OT)}});
+    realism["tags"] = tags;
+  }
+  if (effects.Has(Effect::kHandGeometry)) {
+    jsonf::Json offsets = jsonf::Json::object();
+    for (std::size_t j = 0; j < hand.joints.size(); ++j)
+      offsets[hand.joints[j].name] = {joint_origin_offsets[j].x(), joint_origin_offsets[j].y(), joint_origin_offsets[j].z()};
+    realism["joint_origin_offsets_m"] = offsets;
+  }
+  if (effects.Has(Effect::kHandDeflection)) {
+    realism["joint_stiffness_Nm_per_rad"] = rp.joint_stiffness;
+    realism["deflection_convention"] = "q_motor (recorded, before bias and noise) = q_link + tau_contact / k";
+  }
+  if (opt.images) {
+    realism["true_intrinsics"] = {{"fx", K_lens.fx}, {"fy", K_lens.fy}, {"cx", K_lens.cx}, {"cy", K_lens.cy},
+                                  {"distortion", {K_lens.distortion[0], K_lens.distortion[1], K_lens.distortion[2], K_lens.distortion[3], K_lens.distortion[4]}}};
+    if (camera) realism["lamp"] = {light.lamp.x(), light.lamp.y(), light.lamp.z()};
+  }
   const Quat he(hand_eye_error.linear());
   jsonf::Json truth = {{"joint_biases_rad", biases},
                        {"bias_convention", "q_true = q_meas + bias"},
@@ -454,10 +612,12 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
                        {"tilt_in_hand_deg", summary.tilt_in_hand_deg},
                        {"max_in_hand_rotation_deg", summary.max_in_hand_rotation_deg},
                        {"table_travel_before_grasp_m", summary.table_travel_before_grasp},
-                       {"lift_height_m", summary.lift_height}};
+                       {"lift_height_m", summary.lift_height},
+                       {"realism", realism}};
   INHAND_CHECK(writer != nullptr, "the script ends before the recording starts");
   writer->AddFile("truth/truth.json", truth.dump(2) + "\n");
   writer->AddFile("truth/contacts.csv", contacts_csv.str());
+  writer->AddFile("truth/joints.csv", joints_true_csv.str());
   writer->Commit();
   summary.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return summary;

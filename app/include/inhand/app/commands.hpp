@@ -35,6 +35,7 @@ struct SimulateCommand {
   bool list = false;
   bool overwrite = false;
   bool no_images = false;
+  std::string effects, without;  // realism effects (sessions/realism.hpp), comma-separated
 };
 int RunSimulate(const SimulateCommand& cmd);
 
@@ -87,6 +88,7 @@ struct EvaluateCommand {
   std::string out;
   std::string scenarios;   // comma-separated, "" = all
   int seeds = 5;
+  int first_seed = 1;
   std::string noise = "paper";
   int jobs = 2;            // runs in parallel (processes)
   std::string modalities = "j,jt,jta,jtf";  // the sets each run replays (j plus any of t, a, f)

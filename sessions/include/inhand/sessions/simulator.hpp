@@ -10,14 +10,17 @@
 // that contact part (sessions/FORMAT.md: "external"). The palm follows a scripted trajectory in
 // the world (the arm); the object is a dynamic rigid body (convex pieces, mass, inertia,
 // friction) on a table under gravity; the camera is fixed in the world (the robot's head).
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "inhand/core/so3.hpp"
+#include "inhand/sessions/realism.hpp"
 
 namespace inhand {
 
-enum class NoiseProfile { kNone, kPaper, kHard };
+// `realistic`: the paper's noise plus every effect of realism.hpp (the world is not the model).
+enum class NoiseProfile { kNone, kPaper, kHard, kRealistic };
 NoiseProfile ParseNoiseProfile(const std::string& name);  // throws InputError
 const char* NoiseProfileName(NoiseProfile profile);
 
@@ -42,6 +45,9 @@ struct SimulateOptions {
   int image_height = 480;
   bool images = true;            // false: joints only (fast tests)
   double duration_scale = 1.0;   // < 1 runs a shortened script (tests)
+  // The realism effects (realism.hpp); unset: every effect for `realistic`, none otherwise.
+  std::optional<Effects> effects;
+  RealismParams realism;
 };
 
 struct SimulationSummary {
