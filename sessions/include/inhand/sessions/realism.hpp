@@ -63,7 +63,7 @@ struct RealismParams {
   double joint_origin_sigma = 0.0003;  // [m] per axis of every joint origin (link lengths)
   double joint_stiffness = 20.0;       // [N m/rad] q_motor = q_link + tau / k
   double pad_stiffness = 20000.0;       // [N/m] fingertip pads (distal links)
-  double pad_damping = 40.0;           // [N s/m]
+  double pad_damping = 400.0;           // [N s/m]
   // The torques.
   double drift_sigma = 0.05;           // [N m] stationary std of the offset per joint
   double drift_time = 10.0;            // [s] its correlation time (Ornstein-Uhlenbeck)
