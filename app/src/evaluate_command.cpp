@@ -22,6 +22,7 @@
 #include "inhand/renderer/overlay.hpp"
 #include "inhand/sessions/output_folder.hpp"
 #include "inhand/sessions/simulator.hpp"
+#include "inhand/tracker/tracker_params.hpp"
 
 namespace fs = std::filesystem;
 
@@ -52,11 +53,11 @@ std::string RunDir(const std::string& out, const std::string& scenario, int seed
 }
 
 std::string RunCommand(const std::string& self, const std::string& out, const std::string& scenario, int seed,
-                       const std::string& noise, const std::string& modalities, bool keep) {
+                       const std::string& noise, const std::string& modalities, bool keep, const std::string& params) {
   const std::string dir = RunDir(out, scenario, seed);
   std::string c = Quote(self) + " simulate " + scenario + " --seed " + std::to_string(seed) + " --noise " + noise +
                   " --overwrite --out " + Quote(dir + "/session") + " > " + Quote(dir + "/log.txt") + " 2>&1 && " +
-                  Quote(self) + " replay " + Quote(dir + "/session") + " --modalities " + Quote(modalities) + " --no-video --out " + Quote(dir + "/replay") +
+                  Quote(self) + " replay " + Quote(dir + "/session") + " --modalities " + Quote(modalities) + (params.empty() ? std::string() : " --params " + Quote(params)) + " --no-video --out " + Quote(dir + "/replay") +
                   " >> " + Quote(dir + "/log.txt") + " 2>&1";
   if (!keep) c += " && rm -rf " + Quote(dir + "/session/images");
   return "mkdir -p " + Quote(dir) + " && " + c;
@@ -202,6 +203,11 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       else scenarios.push_back(s);
   }
   ParseModalities(cmd.modalities);  // an unknown set is an error before anything is written
+  std::string params;
+  if (!cmd.params.empty()) {
+    ReadTrackerParams(cmd.params);  // a bad file is an error before any run
+    params = fs::absolute(cmd.params).string();
+  }
   // The evaluation folder collects runs (kept across --plan and --merge): it must be new, empty
   // or an evaluation folder already.
   const fs::path out_dir = CheckOutputFolder(cmd.out);
@@ -225,7 +231,7 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
     sets_of[info.name] = list;
   }
   for (const std::string& s : scenarios)
-    for (int seed = cmd.first_seed; seed <= last_seed; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, sets_of.at(s), cmd.keep_sessions), {s, seed}});
+    for (int seed = cmd.first_seed; seed <= last_seed; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, sets_of.at(s), cmd.keep_sessions, params), {s, seed}});
   if (cmd.plan) {
     std::ofstream plan(fs::path(cmd.out) / "plan.txt");
     for (const auto& r : runs) plan << r.first << "\n";

@@ -103,6 +103,7 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("--first-seed", evaluate.first_seed, "first seed (seeds first..first+N-1; tuned on 1-5, 101 and up unseen)")->capture_default_str();
   evaluate_cmd->add_option("--jobs", evaluate.jobs, "runs in parallel")->capture_default_str();
   evaluate_cmd->add_option("--modalities", evaluate.modalities, "comma-separated sets, as for replay")->capture_default_str();
+  evaluate_cmd->add_option("--params", evaluate.params, "tracker parameters (JSON, as for replay) for every run");
   evaluate_cmd->add_flag("--plan", evaluate.plan, "write plan.txt (one command per run) and stop");
   evaluate_cmd->add_flag("--merge", evaluate.merge, "only build tables and plots from existing runs");
   evaluate_cmd->add_flag("--keep-sessions", evaluate.keep_sessions, "keep the simulated images");

@@ -579,6 +579,9 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   jsonf::Json biases = jsonf::Json::object();
   for (int j = 0; j < m; ++j) biases[hand.joints[hand.q_joints[j]].name] = bias[j];
   jsonf::Json realism = {{"effects", effects.Names()}};
+  const Vec3 world_size = object.Bounds().Size(), model_size = model_object.Bounds().Size();
+  realism["world_object_size_m"] = {world_size.x(), world_size.y(), world_size.z()};
+  realism["model_object_size_m"] = {model_size.x(), model_size.y(), model_size.z()};
   if (effects.Has(Effect::kObjectScale)) realism["object_scale"] = {object_scale.x(), object_scale.y(), object_scale.z()};
   if (effects.Has(Effect::kObjectColour)) realism["colour_gains_rgb"] = {colour_gains.x(), colour_gains.y(), colour_gains.z()};
   if (effects.Has(Effect::kObjectTags)) {

@@ -47,6 +47,7 @@ const std::vector<Field>& Fields() {
       {"slip_scale", &FilterParams::slip_scale, nullptr, nullptr, 1.0, 1e4, false, "in [1, 1e4]"},
       {"pixel_sigma", &FilterParams::pixel_sigma, nullptr, nullptr, 0.01, 1000.0, false, "in [0.01, 1000] px"},
       {"visual_gate_chi2", &FilterParams::visual_gate_chi2, nullptr, nullptr, 0.0, 1e9, false, ">= 0 (0 disables)"},
+      {"visual_model_sigma", &FilterParams::visual_model_sigma, nullptr, nullptr, 0.0, 1000.0, false, "in [0, 1000] px (0 disables)"},
       {"camera_position_sigma", &FilterParams::camera_position_sigma, nullptr, nullptr, 0.0, 1.0, false, "in [0, 1] m"},
       {"camera_orientation_sigma", &FilterParams::camera_orientation_sigma, nullptr, nullptr, 0.0, 1.0, false, "in [0, 1] rad"},
   };

@@ -33,12 +33,34 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
     if (camera_state_) H2_.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
     const Eigen::Vector2d r = f.pixel - rec.predicted;
     rec.gated = Update<2>(r, H2_, Rv, params_.visual_gate_chi2, &rec.mahalanobis) != Outcome::kApplied;
+    if (!rec.gated) CapVisualInformation(Rv);
     used += !rec.gated;
     s_.trace.visual.push_back(rec);
   }
   Commit();
   RefreshKinematics();
   return used;
+}
+
+// visual_model_sigma: the variance of a feature's predicted pixel (the mean over its two axes) may
+// not fall below σ_v² through visual updates: what the camera calibration, the hand-eye pose and
+// the object model get wrong is the same for every feature and every frame, and would otherwise
+// count once per feature per frame. As for contacts (CapContactInformation): the information the
+// update removed below the floor is given back in the directions it was taken from, never more.
+void Filter::CapVisualInformation(const Eigen::Matrix2d& R) {
+  const double floor = params_.visual_model_sigma * params_.visual_model_sigma;
+  if (!(floor > 0.0)) return;
+  const Eigen::Matrix2d V_before = HP2_ * H2_.transpose();
+  const Eigen::Matrix2d S = V_before + R;
+  const Eigen::Matrix2d S_inv = S.inverse();
+  const double v_before = 0.5 * V_before.trace();
+  const double v_after = v_before - 0.5 * (V_before * S_inv * V_before).trace();
+  if (!(v_after < floor) || !(v_before > v_after)) return;
+  const double alpha = std::min(1.0, (floor - v_after) / (v_before - v_after));
+  const Eigen::LLT<Eigen::Matrix2d> llt(alpha * S_inv);
+  if (llt.info() != Eigen::Success) return;
+  HP2_ = llt.matrixU() * HP2_;  // scratch: G with Gᵀ G = α (HP)ᵀ S⁻¹ (HP), exactly symmetric
+  s_.P.noalias() += HP2_.transpose() * HP2_;
 }
 
 }  // namespace inhand

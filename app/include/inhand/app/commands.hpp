@@ -95,6 +95,7 @@ struct EvaluateCommand {
   bool plan = false;       // write plan.txt (one command line per run) and stop
   bool merge = false;      // only build the tables and plots from existing runs
   bool keep_sessions = false;
+  std::string params;      // tracker parameters (JSON) for every replay
 };
 // Simulates and replays every scenario x seed, then writes table1.md, table1.json and one
 // Fig.-7-style plot per scenario.

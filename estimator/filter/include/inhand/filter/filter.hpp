@@ -169,6 +169,7 @@ class Filter {
   bool ApplyContactConstraint(const ContactPair& pair, const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
                               FilterTrace::Contact& rec);
   void CapContactInformation(double var);  // contact_model_sigma, after a normal-only constraint
+  void CapVisualInformation(const Eigen::Matrix2d& R);  // visual_model_sigma, after a feature
   double CandidateWeight(double distance) const;
   // inv_weight_[i] = 1 / weight of candidate i relative to its finger's nearest candidate.
   void ComputeCandidateWeights();

@@ -92,6 +92,13 @@ struct FilterParams {
                                               // error is 5 px at 640x480, 45 deg fov); 4 px beat
                                               // 2, 5, 8 and 10 for tags and extracted features
   double visual_gate_chi2 = 9.21;             // χ²₂ at 99 %
+  double visual_model_sigma = 0.0;            // [px] how well vision can know a feature's pixel
+                                              // at all (camera calibration, hand-eye pose, object
+                                              // model: the same error in every frame): the
+                                              // variance of a predicted pixel stays >= this² as
+                                              // far as visual updates are concerned (the
+                                              // information removed below it is given back);
+                                              // 0 disables
   double camera_position_sigma = 0.0;         // [m] σ per axis of the camera pose's error (hand-
   double camera_orientation_sigma = 0.0;      // [rad] eye calibration): a state of its own, the
                                               // same for every feature and every frame, so that a

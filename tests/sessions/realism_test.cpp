@@ -1,0 +1,529 @@
+// The `realistic` profile: every effect measured where it acts (sessions/realism.hpp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "inhand/core/error.hpp"
+#include "inhand/io/object_loader.hpp"
+#include "inhand/io/urdf_loader.hpp"
+#include "inhand/kinematics/kinematics.hpp"
+#include "inhand/renderer/views.hpp"
+#include "inhand/sessions/camera_sim.hpp"
+#include "inhand/sessions/simulator.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace inhand {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Effect names.
+
+TEST(RealismEffects, ListsGroupsAndNamesTheUnknown) {
+  EXPECT_EQ(Effects::Parse("camera", "--effects").Names().size(), 8u);
+  EXPECT_EQ(Effects::Parse("all", "--effects").Names().size(), static_cast<std::size_t>(Effect::kCount));
+  const Effects e = Effects::Parse("hand.pads, torque", "--effects");
+  EXPECT_EQ(e.Names(), (std::vector<std::string>{"hand.pads", "torque.drift", "torque.residue", "torque.lag"}));
+  EXPECT_FALSE(e.AnyCamera());
+  EXPECT_FALSE(Effects::Parse("camera.intrinsics", "x").AnyCamera());  // the session's numbers, not the image
+  EXPECT_EQ(Effects::All().Without(Effects::Parse("camera", "x")).Names().size(), static_cast<std::size_t>(Effect::kCount) - 8);
+  try {
+    Effects::Parse("hand.pads,camera.fog", "--without");
+    FAIL() << "no error";
+  } catch (const InputError& err) {
+    EXPECT_NE(std::string(err.what()).find("--without: effect 'camera.fog' is unknown"), std::string::npos) << err.what();
+  }
+  EXPECT_EQ(ParseNoiseProfile("realistic"), NoiseProfile::kRealistic);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The object is not its model.
+
+TEST(RealismObject, ScaledBoxHasTheScaledSizeMassAndInertia) {
+  ObjectModel box;
+  const Vec3 half(0.03, 0.02, 0.05);
+  box.pieces.push_back(ConvexPiece::Box(half, MakeTransform(Vec3(0.01, 0, 0), Mat3::Identity())));
+  box.visual.push_back(box.pieces.back().ToMesh());
+  box.mass = 0.4;
+  box.com_O = Vec3(0.01, 0, 0);
+  const auto inertia = [](double m, const Vec3& h) {
+    return Vec3(m / 3 * (h.y() * h.y() + h.z() * h.z()), m / 3 * (h.x() * h.x() + h.z() * h.z()), m / 3 * (h.x() * h.x() + h.y() * h.y()));
+  };
+  box.inertia_com = inertia(box.mass, half).asDiagonal();
+  TagPlacement tag;
+  tag.T_OT = MakeTransform(Vec3(0.0, -0.02, 0.01), Mat3::Identity());
+  box.tags.push_back(tag);
+  const Vec3 s(1.01, 0.995, 1.004);
+  const ObjectModel w = ScaledObject(box, s);
+  EXPECT_NEAR(w.mass, 0.4 * s.prod(), 1e-12);
+  const Vec3 h2 = half.cwiseProduct(s);
+  EXPECT_LT((w.inertia_com.diagonal() - inertia(w.mass, h2)).norm(), 1e-12);
+  EXPECT_LT((w.Bounds().Size() - 2 * h2).norm(), 1e-12);
+  const Aabb pb = [&] {
+    Aabb b;
+    for (const Vec3& v : w.pieces[0].hull_vertices) b.Extend(v);
+    return b;
+  }();
+  EXPECT_LT((pb.min - Vec3(0.01 * s.x(), 0, 0) + h2).norm(), 1e-12);
+  EXPECT_LT((w.com_O - Vec3(0.01 * s.x(), 0, 0)).norm(), 1e-12);
+  EXPECT_LT((w.tags[0].T_OT.translation() - Vec3(0, -0.02 * s.y(), 0.01 * s.z())).norm(), 1e-12);
+  EXPECT_EQ(w.field, nullptr);
+}
+
+TEST(RealismObject, TagsMovedInTheirPlaneAndTurnedByTheGivenAmounts) {
+  ObjectModel o = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  ASSERT_EQ(o.tags.size(), 2u);
+  const ObjectModel before = o;
+  std::mt19937 rng(7);
+  MisplaceTags(o, 0.0005, M_PI / 180, rng);
+  for (std::size_t i = 0; i < o.tags.size(); ++i) {
+    const Vec3 d = before.tags[i].T_OT.linear().transpose() * (o.tags[i].T_OT.translation() - before.tags[i].T_OT.translation());
+    EXPECT_NEAR(d.norm(), 0.0005, 1e-12);
+    EXPECT_NEAR(d.z(), 0.0, 1e-12);  // in the tag's plane
+    EXPECT_NEAR(RotationDistance(o.tags[i].T_OT.linear(), before.tags[i].T_OT.linear()), M_PI / 180, 1e-9);
+  }
+}
+
+TEST(RealismObject, TintChangesMaterialAndTextureColours) {
+  ObjectModel o = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  const ObjectModel before = o;
+  TintObject(o, Vec3(1.1, 1.0, 0.9));
+  bool textured = false;
+  for (std::size_t i = 0; i < o.visual.size(); ++i) {
+    const Eigen::Vector4d a = before.visual[i].material.rgba, b = o.visual[i].material.rgba;
+    EXPECT_NEAR(b[0], std::min(1.0, a[0] * 1.1), 1e-12);
+    EXPECT_NEAR(b[2], a[2] * 0.9, 1e-12);
+    textured |= !o.visual[i].material.texture_blob.empty();
+  }
+  EXPECT_TRUE(textured);  // the ketchup label
+}
+
+// ---------------------------------------------------------------------------------------------
+// The hand is not its URDF.
+
+TEST(RealismHand, JointOriginsOffByTheirSigma) {
+  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
+  std::mt19937 rng(3);
+  std::vector<Vec3> offsets;
+  const HandModel w = PerturbedHand(hand, 0.0003, rng, &offsets);
+  ASSERT_EQ(offsets.size(), hand.joints.size());
+  double sum2 = 0.0;
+  for (std::size_t j = 0; j < hand.joints.size(); ++j) {
+    EXPECT_LT((w.joints[j].T_LJ.translation() - hand.joints[j].T_LJ.translation() - offsets[j]).norm(), 1e-15);
+    sum2 += offsets[j].squaredNorm();
+  }
+  const double sigma = std::sqrt(sum2 / (3.0 * offsets.size()));
+  EXPECT_GT(sigma, 0.0002);
+  EXPECT_LT(sigma, 0.0004);
+  // The fingertips move by the chain's accumulated offsets: sub-millimetre to about a millimetre.
+  KinematicsData a(hand), b(w);
+  const Eigen::VectorXd q = Eigen::VectorXd::Constant(hand.num_q(), 0.3);
+  a.Update(hand, q);
+  b.Update(w, q);
+  double worst = 0.0;
+  for (std::size_t l = 0; l < hand.links.size(); ++l)
+    worst = std::max(worst, (a.T_PL(static_cast<int>(l)).translation() - b.T_PL(static_cast<int>(l)).translation()).norm());
+  EXPECT_GT(worst, 0.0003);
+  EXPECT_LT(worst, 0.003);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Simulated sessions (joints only, shortened).
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+  int Col(const std::string& name) const {
+    for (std::size_t i = 0; i < header.size(); ++i)
+      if (header[i] == name) return static_cast<int>(i);
+    return -1;
+  }
+};
+Csv ReadCsv(const std::string& path) {
+  Csv c;
+  std::ifstream in(path);
+  std::string line, cell;
+  std::getline(in, line);
+  std::stringstream hs(line);
+  while (std::getline(hs, cell, ',')) c.header.push_back(cell);
+  while (std::getline(in, line)) {
+    std::stringstream ls(line);
+    std::vector<double> row;
+    while (std::getline(ls, cell, ',')) row.push_back(std::stod(cell));
+    c.rows.push_back(row);
+  }
+  return c;
+}
+
+SimulationSummary Sim(const std::string& out, const std::string& effects, double duration_scale = 0.5,
+                      const std::string& scenario = "ketchup-power-grasp") {
+  SimulateOptions o;
+  o.scenario = scenario;
+  o.out_dir = out;
+  o.seed = 5;
+  o.noise = NoiseProfile::kNone;
+  o.images = false;
+  o.duration_scale = duration_scale;
+  o.effects = effects.empty() ? Effects::None() : Effects::Parse(effects, "test");
+  return Simulate(o);
+}
+
+TEST(RealisticSimulation, NoneStillGivesExactJointMeasurements) {
+  test::TempDir dir;
+  Sim(dir / "s", "");
+  const Csv meas = ReadCsv(dir / "s/joints.csv"), truth = ReadCsv(dir / "s/truth/joints.csv");
+  ASSERT_EQ(meas.rows.size(), truth.rows.size());
+  ASSERT_GT(meas.rows.size(), 500u);
+  for (std::size_t i = 1; i < truth.header.size(); ++i) {
+    const int c = meas.Col("q:" + truth.header[i]);
+    ASSERT_GE(c, 0) << truth.header[i];
+    for (std::size_t k = 0; k < meas.rows.size(); ++k) ASSERT_EQ(meas.rows[k][c], truth.rows[k][i]) << truth.header[i] << " sample " << k;
+  }
+}
+
+TEST(RealisticSimulation, JointDeflectionFollowsTorqueOverStiffness) {
+  test::TempDir dir;
+  Sim(dir / "s", "hand.deflection");
+  const Csv meas = ReadCsv(dir / "s/joints.csv"), truth = ReadCsv(dir / "s/truth/joints.csv");
+  const double k = RealismParams().joint_stiffness;
+  double largest = 0.0;
+  for (std::size_t i = 1; i < truth.header.size(); ++i) {
+    const int q = meas.Col("q:" + truth.header[i]), tau = meas.Col("tau:" + truth.header[i]);
+    ASSERT_GE(q, 0);
+    ASSERT_GE(tau, 0);
+    for (std::size_t s = 0; s < meas.rows.size(); ++s) {
+      // The encoder (motor side) is ahead of the link by the load over the stiffness.
+      ASSERT_NEAR(meas.rows[s][q] - truth.rows[s][i], meas.rows[s][tau] / k, 1e-12) << truth.header[i] << " sample " << s;
+      largest = std::max(largest, std::abs(meas.rows[s][q] - truth.rows[s][i]));
+    }
+  }
+  EXPECT_GT(largest, 0.03);  // the grasp loads the joints: > 1.7 deg of deflection somewhere
+}
+
+// Torque columns of a session, per sample.
+std::vector<Eigen::VectorXd> Torques(const Csv& c) {
+  std::vector<int> cols;
+  for (std::size_t i = 0; i < c.header.size(); ++i)
+    if (c.header[i].rfind("tau:", 0) == 0) cols.push_back(static_cast<int>(i));
+  std::vector<Eigen::VectorXd> out;
+  for (const auto& row : c.rows) {
+    Eigen::VectorXd v(static_cast<int>(cols.size()));
+    for (std::size_t j = 0; j < cols.size(); ++j) v[static_cast<int>(j)] = row[static_cast<std::size_t>(cols[j])];
+    out.push_back(v);
+  }
+  return out;
+}
+
+TEST(RealisticSimulation, TorqueDriftIsASlowOffsetOfItsSigma) {
+  test::TempDir dir;
+  Sim(dir / "a", "", 0.4);
+  Sim(dir / "b", "torque.drift", 0.4);  // the same physics: the torque effects change no motion
+  const auto a = Torques(ReadCsv(dir / "a/joints.csv")), b = Torques(ReadCsv(dir / "b/joints.csv"));
+  ASSERT_EQ(a.size(), b.size());
+  const Eigen::VectorXd d0 = b.front() - a.front();
+  const double sigma = std::sqrt(d0.squaredNorm() / d0.size());
+  EXPECT_GT(sigma, 0.025);
+  EXPECT_LT(sigma, 0.09);
+  // Ornstein-Uhlenbeck: over 0.1 s (50 samples at 500 Hz) the offset changes by
+  // sigma sqrt(2 (1 - exp(-0.1 s / T))), 0.007 N m for 10 s: slow against its size.
+  const RealismParams p;
+  const double expected = p.drift_sigma * std::sqrt(2.0 * (1.0 - std::exp(-0.1 / p.drift_time)));
+  double sum2 = 0.0;
+  int n = 0;
+  for (std::size_t k = 50; k < a.size(); k += 50, n += static_cast<int>(d0.size()))
+    sum2 += ((b[k] - a[k]) - (b[k - 50] - a[k - 50])).squaredNorm();
+  EXPECT_NEAR(std::sqrt(sum2 / n) / expected, 1.0, 0.3);
+}
+
+TEST(RealisticSimulation, TorqueLagIsAFirstOrderLowPass) {
+  test::TempDir dir;
+  Sim(dir / "a", "", 0.4);
+  Sim(dir / "b", "torque.lag", 0.4);
+  const auto a = Torques(ReadCsv(dir / "a/joints.csv")), b = Torques(ReadCsv(dir / "b/joints.csv"));
+  ASSERT_EQ(a.size(), b.size());
+  // The same low pass applied to the recorded (500 Hz) contact part predicts it.
+  const double dt = 0.002, T = RealismParams().torque_lag;
+  Eigen::VectorXd lp = a.front();
+  double err_lp = 0.0, err_raw = 0.0;
+  for (std::size_t k = 1; k < a.size(); ++k) {
+    lp += (dt / (dt + T)) * (a[k] - lp);
+    err_lp += (b[k] - lp).squaredNorm();
+    err_raw += (b[k] - a[k]).squaredNorm();
+  }
+  EXPECT_GT(err_raw, 1e-3);  // the grasp's torques change, so the lag shows
+  EXPECT_LT(err_lp, 0.1 * err_raw);
+}
+
+TEST(RealisticSimulation, FingertipPadsSinkUnderTheGraspForce) {
+  test::TempDir dir;
+  const SimulationSummary pads = Sim(dir / "p", "hand.pads", 0.7);
+  EXPECT_GT(pads.max_penetration, 0.0005);
+  EXPECT_LT(pads.max_penetration, 0.0025);
+  EXPECT_GT(pads.held_fraction, 0.95);
+}
+
+TEST(RealisticSimulation, WorldObjectAndHandAreNotTheModels) {
+  test::TempDir dir;
+  Sim(dir / "s", "object.scale,hand.geometry", 0.2);
+  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json")).at("realism");
+  const auto world = t.at("world_object_size_m").get<std::vector<double>>();
+  const auto model = t.at("model_object_size_m").get<std::vector<double>>();
+  const auto scale = t.at("object_scale").get<std::vector<double>>();
+  double off = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(world[a], model[a] * scale[a], 1e-9);
+    off = std::max(off, std::abs(scale[a] - 1.0));
+  }
+  EXPECT_GT(off, 1e-4);
+  EXPECT_LT(off, 0.025);  // 5 sigma
+  EXPECT_EQ(t.at("joint_origin_offsets_m").size(), LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf")).joints.size());
+  // The session still carries the nominal models.
+  EXPECT_EQ(test::ReadFile(dir / "s/model/object/ketchup_bottle.obj"), test::ReadFile(test::ProjectAsset("objects/ketchup_bottle/ketchup_bottle.obj")));
+  EXPECT_EQ(test::ReadFile(dir / "s/model/hand/inhand_hand.urdf"), test::ReadFile(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf")));
+}
+
+TEST(RealisticSimulation, SameSeedGivesByteIdenticalSessionsWithEveryEffect) {
+  test::TempDir dir;
+  const auto run = [&](const std::string& name, unsigned seed) {
+    SimulateOptions o;
+    o.scenario = "ketchup-power-grasp";
+    o.out_dir = dir / name;
+    o.seed = seed;
+    o.noise = NoiseProfile::kRealistic;
+    o.duration_scale = 0.3;
+    o.image_width = 160;
+    o.image_height = 120;
+    Simulate(o);
+  };
+  run("a", 2);
+  run("b", 2);
+  std::vector<std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir / "a"))
+    if (e.is_regular_file()) files.push_back(fs::relative(e.path(), dir / "a").string());
+  ASSERT_GT(files.size(), 10u);
+  for (const std::string& f : files) EXPECT_EQ(test::ReadFile(dir / ("b/" + f)), test::ReadFile(dir / ("a/" + f))) << f;
+  run("c", 3);
+  EXPECT_NE(test::ReadFile(dir / "c/images/frame_000001.png"), test::ReadFile(dir / "a/images/frame_000001.png"));
+  // The session's camera is not the true one.
+  const nlohmann::json s = nlohmann::json::parse(test::ReadFile(dir / "a/session.json")).at("camera");
+  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "a/truth/truth.json")).at("realism").at("true_intrinsics");
+  EXPECT_NE(s.at("fx").get<double>(), t.at("fx").get<double>());
+  EXPECT_NEAR(s.at("fx").get<double>() / t.at("fx").get<double>(), 1.0, 0.025);
+  EXPECT_NEAR(s.at("cx").get<double>(), t.at("cx").get<double>(), 10.0);
+  const double k1_session = s.at("distortion")[0].get<double>(), k1_true = t.at("distortion")[0].get<double>();
+  EXPECT_NE(k1_session, k1_true);
+  EXPECT_NEAR(k1_session / k1_true, 1.0, 0.25);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The camera is not our renderer (CameraSimulator on the real renderer).
+
+Intrinsics SmallCamera() {
+  Intrinsics K;
+  K.width = 320;
+  K.height = 240;
+  K.fx = K.fy = 290.0;
+  K.cx = 159.5;
+  K.cy = 119.5;
+  return K;
+}
+
+int FlatBox(Renderer& r, const Vec3& half, const Eigen::Vector4d& rgba) {
+  TriangleMesh m = ConvexPiece::Box(half, Transform::Identity()).ToMesh();
+  m.material.rgba = rgba;
+  return r.AddMesh(m);
+}
+
+double Linear(std::uint8_t v) { return std::pow(v / 255.0, 2.2); }
+
+TEST(CameraSimulator, LensDistortionMovesPointsWhereItsCoefficientsSay) {
+  Renderer renderer;
+  Intrinsics K = SmallCamera();
+  RealismParams p;
+  K.distortion = p.distortion;
+  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.distortion", "test"), LightRig(), 1);
+  EXPECT_GT(camera.margin(), 5);
+  Scene scene;
+  scene.K = SmallCamera();
+  scene.T_PC = Transform::Identity();
+  const int square = FlatBox(renderer, Vec3(0.003, 0.003, 0.0005), Eigen::Vector4d(1, 1, 1, 1));
+  const std::vector<Vec2> ideal = {{30, 25}, {290, 25}, {30, 215}, {290, 215}, {160, 120}, {100, 60}};
+  for (const Vec2& u : ideal)
+    scene.items.push_back({square, MakeTransform(scene.K.Unproject(u, 0.5), Mat3::Identity()), 1, std::nullopt, 1.0, true});
+  Image8 out;
+  camera.Capture({scene}, out);
+  for (const Vec2& u : ideal) {
+    const Vec2 expected = K.Distort(u);
+    double w = 0.0;
+    Vec2 c = Vec2::Zero();
+    for (int y = static_cast<int>(expected.y()) - 10; y <= static_cast<int>(expected.y()) + 10; ++y)
+      for (int x = static_cast<int>(expected.x()) - 10; x <= static_cast<int>(expected.x()) + 10; ++x) {
+        if (x < 0 || y < 0 || x >= K.width || y >= K.height) continue;
+        const double v = Linear(out.pixel(x, y)[1]);
+        w += v;
+        c += v * Vec2(x, y);
+      }
+    ASSERT_GT(w, 1.0) << "nothing seen near " << expected.transpose();
+    c /= w;
+    EXPECT_LT((c - expected).norm(), 0.3) << "ideal " << u.transpose() << " expected " << expected.transpose() << " seen " << c.transpose();
+    if ((u - Vec2(160, 120)).norm() > 150) {
+      EXPECT_GT((expected - u).norm(), 5.0);  // the lens moves the corners
+    }
+  }
+}
+
+// Where the segment a-b meets the axis-aligned box [lo, hi] (slab test).
+bool SegmentHitsBox(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < 3; ++i) {
+    const double d = b[i] - a[i];
+    if (std::abs(d) < 1e-12) {
+      if (a[i] < lo[i] || a[i] > hi[i]) return false;
+      continue;
+    }
+    double u = (lo[i] - a[i]) / d, v = (hi[i] - a[i]) / d;
+    if (u > v) std::swap(u, v);
+    t0 = std::max(t0, u);
+    t1 = std::min(t1, v);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+TEST(CameraSimulator, CastShadowsWhereTheLampIsOccluded) {
+  Renderer renderer;
+  const Intrinsics K = SmallCamera();
+  LightRig light;
+  light.lamp = Vec3(0, 0, 1.0);
+  light.lamp_target = Vec3(0, 0, 0);
+  CameraSimulator camera(renderer, K, RealismParams(), Effects::Parse("camera.light", "test"), light, 1);
+  Scene scene;
+  scene.K = K;
+  scene.T_PC = LookAt(Vec3(0.5, 0.05, 0.9), Vec3(0, 0, 0), Vec3::UnitZ());
+  const Vec3 half(0.05, 0.05, 0.01), centre(0, 0, 0.3);
+  scene.items.push_back({FlatBox(renderer, Vec3(0.5, 0.5, 0.01), Eigen::Vector4d(0.7, 0.7, 0.7, 1)), MakeTransform(Vec3(0, 0, -0.01), Mat3::Identity()), 1, std::nullopt, 1.0, false});
+  scene.items.push_back({FlatBox(renderer, half, Eigen::Vector4d(0.3, 0.3, 0.8, 1)), MakeTransform(centre, Mat3::Identity()), 2, std::nullopt, 1.0, false});
+  const std::vector<float> rgb = camera.Radiance(scene);
+  const int m = camera.margin(), W = K.width + 2 * m;
+  double shadow = 0.0, lit = 0.0;
+  int n_shadow = 0, n_lit = 0;
+  for (int y = 0; y < K.height; ++y)
+    for (int x = 0; x < K.width; ++x) {
+      // The table point this pixel sees (skipping pixels whose ray meets the box first).
+      const Vec3 eye = scene.T_PC.translation();
+      const Vec3 dir = scene.T_PC.linear() * K.Unproject(Vec2(x, y), 1.0);
+      if (dir.z() >= 0) continue;
+      const Vec3 P = eye + dir * (-eye.z() / dir.z());
+      if (std::abs(P.x()) > 0.45 || std::abs(P.y()) > 0.45) continue;
+      const Vec3 grow(0.01, 0.01, 0.01);
+      if (SegmentHitsBox(eye, P, centre - half - grow, centre + half + grow)) continue;
+      const double g = rgb[3 * (std::size_t(y + m) * W + x + m) + 1];
+      if (SegmentHitsBox(P, light.lamp, centre - half + grow, centre + half - grow)) {
+        shadow += g;
+        ++n_shadow;
+      } else if (!SegmentHitsBox(P, light.lamp, centre - half - 2 * grow, centre + half + 2 * grow) && P.norm() < 0.2) {
+        lit += g;
+        ++n_lit;
+      }
+    }
+  ASSERT_GT(n_shadow, 200);
+  ASSERT_GT(n_lit, 200);
+  shadow /= n_shadow;
+  lit /= n_lit;
+  EXPECT_LT(shadow, 0.35 * lit) << "shadow " << shadow << " lit " << lit;
+  EXPECT_GT(shadow, 0.0);  // ambient and fill light remain
+}
+
+Scene GreyWall(Renderer& renderer, const Intrinsics& K, double grey) {
+  Scene scene;
+  scene.K = K;
+  scene.items.push_back({FlatBox(renderer, Vec3(2, 2, 0.01), Eigen::Vector4d(grey, grey, grey, 1)), MakeTransform(Vec3(0, 0, 1.0), Mat3::Identity()), 1, std::nullopt, 1.0, true});
+  return scene;
+}
+
+double MeanLinear(const Image8& img, int x0, int y0, int size, int channel, double* stddev = nullptr) {
+  double s = 0.0, s2 = 0.0;
+  for (int y = y0; y < y0 + size; ++y)
+    for (int x = x0; x < x0 + size; ++x) {
+      const double v = Linear(img.pixel(x, y)[channel]);
+      s += v;
+      s2 += v * v;
+    }
+  const double n = double(size) * size, mean = s / n;
+  if (stddev) *stddev = std::sqrt(std::max(0.0, s2 / n - mean * mean));
+  return mean;
+}
+
+TEST(CameraSimulator, VignettingDarkensTheCornersByItsAmount) {
+  Renderer renderer;
+  const Intrinsics K = SmallCamera();
+  RealismParams p;
+  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.vignetting", "test"), LightRig(), 1);
+  Image8 out;
+  camera.Capture({GreyWall(renderer, K, 0.8)}, out);
+  const double centre = MeanLinear(out, 155, 115, 10, 1), corner = MeanLinear(out, 0, 0, 3, 1);
+  const double r2 = (Vec2(1, 1) - Vec2(K.cx, K.cy)).squaredNorm() / (0.25 * (320.0 * 320 + 240.0 * 240));
+  EXPECT_NEAR(corner / centre, 1.0 - p.vignetting * r2, 0.02);
+}
+
+TEST(CameraSimulator, ExposureDriftsFromFrameToFrameAndSensorNoiseFollowsTheSignal) {
+  Renderer renderer;
+  const Intrinsics K = SmallCamera();
+  RealismParams p;
+  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.exposure,camera.sensor_noise", "test"), LightRig(), 4);
+  const Scene wall = GreyWall(renderer, K, 0.7);
+  std::vector<double> log_means;
+  double noise_ratio = 0.0;
+  for (int f = 0; f < 40; ++f) {
+    Image8 out;
+    camera.Capture({wall}, out);
+    double sd = 0.0;
+    const double mean = MeanLinear(out, 100, 80, 60, 1, &sd);
+    log_means.push_back(std::log(mean));
+    // Shot noise sqrt(e) and read noise in electrons, at this frame's signal (quantisation adds a little).
+    const double e = mean * p.full_well;
+    noise_ratio += sd / (std::sqrt(e + p.read_noise * p.read_noise) / p.full_well) / 40.0;
+  }
+  double m = 0.0, v = 0.0;
+  for (double l : log_means) m += l / log_means.size();
+  for (double l : log_means) v += (l - m) * (l - m) / (log_means.size() - 1);
+  EXPECT_GT(std::sqrt(v), 0.03);
+  EXPECT_LT(std::sqrt(v), 0.16);  // exposure 0.08 and the green channel's white balance 0.03
+  EXPECT_NEAR(noise_ratio, 1.0, 0.15);
+}
+
+TEST(CameraSimulator, MotionBlurAveragesTheSubFrames) {
+  Renderer renderer;
+  const Intrinsics K = SmallCamera();
+  CameraSimulator camera(renderer, K, RealismParams(), Effects::Parse("camera.motion_blur", "test"), LightRig(), 1);
+  const int square = FlatBox(renderer, Vec3(0.02, 0.02, 0.001), Eigen::Vector4d(1, 1, 1, 1));
+  std::vector<Scene> frames;
+  for (int i = 0; i < 3; ++i) {  // 10 px apart at 0.5 m
+    Scene s;
+    s.K = K;
+    s.items.push_back({square, MakeTransform(Vec3(i * 10 * 0.5 / K.fx, 0, 0.5), Mat3::Identity()), 1, std::nullopt, 1.0, true});
+    frames.push_back(s);
+  }
+  const auto partial = [&](const Image8& img) {
+    int n = 0;
+    for (int x = 0; x < K.width; ++x) {
+      const double v = Linear(img.pixel(x, 120)[1]);
+      n += v > 0.2 && v < 0.8;
+    }
+    return n;
+  };
+  Image8 blurred, sharp;
+  camera.Capture(frames, blurred);
+  camera.Capture({frames.back()}, sharp);
+  EXPECT_LE(partial(sharp), 2);
+  EXPECT_GE(partial(blurred), 18);  // two steps of 10 px at 1/3 and 2/3 on both edges
+}
+
+}  // namespace
+}  // namespace inhand
