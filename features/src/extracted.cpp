@@ -22,6 +22,7 @@ void FeatureParams::Validate() const {
   if (occluder_clearance < 0 || occluder_clearance > 100) fail("occluder_clearance", occluder_clearance, "in [0, 100]");
   if (piece_radius < 3 || piece_radius > 100) fail("piece_radius", piece_radius, "in [3, 100]");
   if (search_radius < 1 || search_radius > 200) fail("search_radius", search_radius, "in [1, 200]");
+  if (max_search_radius < search_radius || max_search_radius > 200) fail("max_search_radius", max_search_radius, "in [search_radius, 200]");
   if (orientation_bins < 1 || orientation_bins > 64) fail("orientation_bins", orientation_bins, "in [1, 64]");
   if (!(min_vote_fraction > 0 && min_vote_fraction <= 1)) fail("min_vote_fraction", min_vote_fraction, "in (0, 1]");
   if (!(ransac_threshold > 0)) fail("ransac_threshold", ransac_threshold, "> 0");

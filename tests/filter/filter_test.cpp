@@ -572,6 +572,7 @@ TEST(Filter, FeaturesOfOneFrameShareTheCameraError) {
     params.visual_gate_chi2 = 0.0;
     params.camera_position_sigma = camera_sigma;
     params.camera_orientation_sigma = 0.0;
+    params.visual_model_sigma = 0.0;  // the paper's independent features
     Filter f = s.Started(At(p), params, false);
     EXPECT_EQ(f.UpdateVisual(features, T_PC, K), 40);
     return f;
@@ -590,6 +591,35 @@ TEST(Filter, FeaturesOfOneFrameShareTheCameraError) {
   EXPECT_NEAR(moved_independent, 0.0015, 0.0001);
   EXPECT_GT(moved_shared, 0.0012);
   EXPECT_LT(moved_shared, moved_independent);
+}
+
+// visual_model_sigma: 40 features a frame over 10 frames cannot make a feature's pixel known
+// better than the floor (the independent features of the paper would claim 0.3 mm after one),
+// and the floor gives back no more than needed to reach it.
+TEST(Filter, VisualModelSigmaBoundsWhatFramesOfFeaturesCanKnow) {
+  FingerScene s;
+  const Intrinsics K = TestIntrinsics();
+  const Vec3 p(0.0, 0.06, 0.04);
+  const Transform T_PC = CameraLookingAt(p);
+  std::vector<VisualFeature> features;
+  for (int i = 0; i < 40; ++i) {
+    const Vec3 x_O(0.03 * std::cos(0.7 * i), 0.03 * std::sin(1.3 * i), 0.02 * std::cos(2.1 * i));
+    features.push_back({i, x_O, K.Project(T_PC.inverse() * (p + x_O))});
+  }
+  FilterParams params;
+  params.pixel_sigma = 2.0;
+  params.visual_gate_chi2 = 0.0;
+  params.visual_model_sigma = 4.0;
+  Filter f = s.Started(At(p), params, false);
+  for (int frame = 0; frame < 10; ++frame) EXPECT_EQ(f.UpdateVisual(features, T_PC, K), 40);
+  // Along the camera's x axis a position error moves every pixel alike: its σ in pixels is the
+  // floor's, up to the share the orientation takes of each feature's variance.
+  const Vec3 axis = T_PC.linear().col(0);
+  const double z = (T_PC.inverse() * p).z();
+  const double sigma_px = K.fx / z * std::sqrt(axis.dot(f.covariance().topLeftCorner<3, 3>() * axis));
+  EXPECT_GT(sigma_px, 0.5 * params.visual_model_sigma);
+  EXPECT_LT(sigma_px, 1.5 * params.visual_model_sigma);
+  EXPECT_NEAR(f.position().x(), p.x(), 1e-9);  // exact pixels: no bias from the floor
 }
 
 // The camera's error is a state of its own, constant over frames: with the object pose known

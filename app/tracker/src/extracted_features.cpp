@@ -1,6 +1,9 @@
 #include "extracted_features.hpp"
 
+#include <algorithm>
 #include <cmath>
+
+#include <Eigen/Eigenvalues>
 
 namespace inhand::tracker_detail {
 
@@ -29,7 +32,29 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     object_mask_[i] = label[i] == kObjectLabel;
     hand_mask_[i] = label[i] >= kHandLabelBase && label[i] < kExtraLabelBase;
   }
-  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, params_, &hand_mask_, false);  // no debug-only camera corners
+  // Search as far as the estimate is uncertain: 3σ of the pixel of the object's centre (its
+  // position, and its orientation at the object's radius), within [search_radius,
+  // max_search_radius], and as far as allowed until a frame has matched well: a first match that
+  // bridges a start far off (even one the start's σ does not admit), local once it has converged.
+  FeatureParams p = params_;
+  if (!matched_well_) {
+    p.search_radius = params_.max_search_radius;
+  } else {
+    const Eigen::MatrixXd& P = f.covariance();
+    const Aabb box = object_.Bounds();
+    const Vec3 X_C = T_PC.inverse() * (f.T_PO() * box.Center());
+    if (X_C.z() > 1e-3) {
+      const Eigen::Matrix<double, 2, 3> J = K.ProjectJacobian(X_C) * T_PC.linear().transpose();
+      const Eigen::Matrix2d S = J * P.topLeftCorner<3, 3>() * J.transpose();
+      const double sigma_theta2 = Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(3, 3)).eigenvalues().maxCoeff();
+      const double r_px = 0.5 * box.Size().norm() * K.fx / X_C.z();
+      const double sigma2 = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvalues().maxCoeff() + r_px * r_px * sigma_theta2;
+      p.search_radius = std::clamp(static_cast<int>(std::ceil(3.0 * std::sqrt(std::max(sigma2, 0.0)))), params_.search_radius,
+                                   params_.max_search_radius);
+    }
+  }
+  step.search_radius = p.search_radius;
+  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false);  // no debug-only camera corners
   // Inliers to object points through the virtual depth, moved into O with the estimate.
   const Transform T_OP = f.T_PO().inverse();
   out.clear();
@@ -45,6 +70,7 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     out.push_back({match.id, T_OP * X_P, K.Undistort(match.real_px)});
     step.used_match.push_back(static_cast<int>(m));
   }
+  matched_well_ = matched_well_ || static_cast<int>(out.size()) >= kWellMatched;
 }
 
 }  // namespace inhand::tracker_detail

@@ -29,6 +29,8 @@ class ExtractedFeatures {
   HandMeshes hand_meshes_;
   std::vector<int> object_meshes_;
   std::vector<std::uint8_t> object_mask_, hand_mask_;
+  static constexpr int kWellMatched = 8;  // inliers on the object that end the wide first search
+  bool matched_well_ = false;
 };
 
 }  // namespace inhand::tracker_detail

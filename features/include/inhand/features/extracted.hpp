@@ -34,6 +34,10 @@ struct FeatureParams {
   int piece_radius = 14;             // [px] contour piece: edge pixels within this radius
   int min_piece_pixels = 12;         // pieces with fewer edge pixels are rejected
   int search_radius = 30;            // [px] local Hough search around the virtual corner
+  int max_search_radius = 90;        // [px] the tracker widens the search to 3σ of the object's
+                                     // predicted pixel while the estimate is uncertain (a start
+                                     // 40 mm off is 45 px at 0.5 m), up to this; = search_radius
+                                     // keeps it fixed
   int orientation_bins = 12;         // gradient-direction bins (mod π); neighbours may vote
   double min_vote_fraction = 0.35;   // votes of the peak over the piece's pixels
   double ransac_threshold = 2.5;     // [px]

@@ -80,6 +80,7 @@ struct VisualStep {
   bool has_features = false;
   RenderOutput virtual_view;
   MatchResult match;
+  int search_radius = 0;           // [px] the Hough search used (widened while uncertain)
   std::vector<int> used_match;     // index into match.matches
   std::vector<double> residual_before, residual_after;  // [px]
 };

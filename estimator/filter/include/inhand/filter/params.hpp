@@ -92,7 +92,7 @@ struct FilterParams {
                                               // error is 5 px at 640x480, 45 deg fov); 4 px beat
                                               // 2, 5, 8 and 10 for tags and extracted features
   double visual_gate_chi2 = 9.21;             // χ²₂ at 99 %
-  double visual_model_sigma = 0.0;            // [px] how well vision can know a feature's pixel
+  double visual_model_sigma = 4.0;            // [px] how well vision can know a feature's pixel
                                               // at all (camera calibration, hand-eye pose, object
                                               // model: the same error in every frame): the
                                               // variance of a predicted pixel stays >= this² as
