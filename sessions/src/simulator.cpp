@@ -1,8 +1,8 @@
 #include "inhand/sessions/simulator.hpp"
 
 #include <chrono>
-#include <deque>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -20,8 +20,8 @@
 #include "inhand/kinematics/kinematics.hpp"
 #include "inhand/renderer/views.hpp"
 #include "inhand/sessions/session.hpp"
-#include "inhand/sessions/output_folder.hpp"
 #include "inhand/sessions/camera_sim.hpp"
+#include "inhand/sessions/output_folder.hpp"
 #include "scenarios.hpp"
 #include "sim_world.hpp"
 
