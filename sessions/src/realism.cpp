@@ -1,5 +1,5 @@
 // The realistic profile's effects: realism.hpp (object, hand, torques) and camera_sim.hpp (the
-// camera), which share the transfer curves and random streams below.
+// camera) in one file, as they share the helpers below.
 #include "inhand/sessions/camera_sim.hpp"
 
 #include <algorithm>
