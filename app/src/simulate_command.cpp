@@ -24,8 +24,7 @@ int RunSimulate(const SimulateCommand& cmd) {
   options.overwrite = cmd.overwrite;
   options.images = !cmd.no_images;
   if (!cmd.effects.empty() || !cmd.without.empty()) {
-    Effects e = cmd.effects.empty() ? (options.noise == NoiseProfile::kRealistic ? Effects::All() : Effects::None())
-                                    : Effects::Parse(cmd.effects, "--effects");
+    Effects e = cmd.effects.empty() ? EffectsOf(options) : Effects::Parse(cmd.effects, "--effects");
     if (!cmd.without.empty()) e = e.Without(Effects::Parse(cmd.without, "--without"));
     options.effects = e;
   }
@@ -37,10 +36,9 @@ int RunSimulate(const SimulateCommand& cmd) {
             << 100 * s.held_fraction << " % of the time after the grasp, in-hand rotation " << s.tilt_in_hand_deg
             << " deg at the end (max " << s.max_in_hand_rotation_deg << "), travel before the grasp "
             << s.table_travel_before_grasp * 1000 << " mm, lifted " << s.lift_height * 1000 << " mm\n";
-  if (options.effects ? options.effects->Any() : options.noise == NoiseProfile::kRealistic) {
-    const std::vector<std::string> names = (options.effects ? *options.effects : Effects::All()).Names();
+  if (const Effects effects = EffectsOf(options); effects.Any()) {
     std::cout << "realism effects:";
-    for (const std::string& n : names) std::cout << " " << n;
+    for (const std::string& n : effects.Names()) std::cout << " " << n;
     std::cout << "\n";
   }
   return 0;

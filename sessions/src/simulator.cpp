@@ -47,6 +47,11 @@ const char* NoiseProfileName(NoiseProfile p) {
   return "?";
 }
 
+Effects EffectsOf(const SimulateOptions& options) {
+  if (options.effects) return *options.effects;
+  return options.noise == NoiseProfile::kRealistic ? Effects::All() : Effects::None();
+}
+
 namespace {
 
 // The numbers of each noise profile (documented in sessions/FORMAT.md).
@@ -202,7 +207,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   const ObjectModel model_object = LoadObjectModel((object_dir / "object.json").string());
   const int m = model_hand.num_q();
   const Noise noise = NoiseFor(opt.noise);
-  const Effects effects = opt.effects ? *opt.effects : opt.noise == NoiseProfile::kRealistic ? Effects::All() : Effects::None();
+  const Effects effects = EffectsOf(opt);
   const RealismParams& rp = opt.realism;
   std::mt19937 rng(opt.seed * 7919u + 17u);
   std::normal_distribution<double> gauss(0.0, 1.0);

@@ -254,6 +254,17 @@ Transform CameraLookingAt(const Vec3& p) {
   return MakeTransform(eye, Rc);
 }
 
+// 40 points spread over a 6 x 6 x 4 cm object at p (identity orientation), exactly as a camera
+// at T_PC_true sees them.
+std::vector<VisualFeature> FeaturesSeenFrom(const Transform& T_PC_true, const Intrinsics& K, const Vec3& p) {
+  std::vector<VisualFeature> features;
+  for (int i = 0; i < 40; ++i) {
+    const Vec3 x_O(0.03 * std::cos(0.7 * i), 0.03 * std::sin(1.3 * i), 0.02 * std::cos(2.1 * i));
+    features.push_back({i, x_O, K.Project(T_PC_true.inverse() * (p + x_O))});
+  }
+  return features;
+}
+
 Intrinsics TestIntrinsics() {
   Intrinsics K;
   K.fx = 600;
@@ -561,11 +572,7 @@ TEST(Filter, FeaturesOfOneFrameShareTheCameraError) {
   const Vec3 p(0.0, 0.06, 0.04);
   const Transform T_PC = CameraLookingAt(p);
   const Transform T_PC_true = T_PC * MakeTransform(Vec3(0.0015, 0, 0), Mat3::Identity());
-  std::vector<VisualFeature> features;
-  for (int i = 0; i < 40; ++i) {
-    const Vec3 x_O(0.03 * std::cos(0.7 * i), 0.03 * std::sin(1.3 * i), 0.02 * std::cos(2.1 * i));
-    features.push_back({i, x_O, K.Project(T_PC_true.inverse() * (p + x_O))});
-  }
+  const std::vector<VisualFeature> features = FeaturesSeenFrom(T_PC_true, K, p);
   const auto fused = [&](double camera_sigma) {
     FilterParams params;
     params.pixel_sigma = 2.0;
@@ -601,11 +608,7 @@ TEST(Filter, VisualModelSigmaBoundsWhatFramesOfFeaturesCanKnow) {
   const Intrinsics K = TestIntrinsics();
   const Vec3 p(0.0, 0.06, 0.04);
   const Transform T_PC = CameraLookingAt(p);
-  std::vector<VisualFeature> features;
-  for (int i = 0; i < 40; ++i) {
-    const Vec3 x_O(0.03 * std::cos(0.7 * i), 0.03 * std::sin(1.3 * i), 0.02 * std::cos(2.1 * i));
-    features.push_back({i, x_O, K.Project(T_PC.inverse() * (p + x_O))});
-  }
+  const std::vector<VisualFeature> features = FeaturesSeenFrom(T_PC, K, p);
   FilterParams params;
   params.pixel_sigma = 2.0;
   params.visual_gate_chi2 = 0.0;
@@ -632,11 +635,7 @@ TEST(Filter, TheCameraErrorIsEstimatedAndKeptAcrossFrames) {
   const Transform T_PC = CameraLookingAt(p);
   const Vec3 offset(0.0015, 0, 0);
   const Transform T_PC_true = T_PC * MakeTransform(offset, Mat3::Identity());
-  std::vector<VisualFeature> features;
-  for (int i = 0; i < 40; ++i) {
-    const Vec3 x_O(0.03 * std::cos(0.7 * i), 0.03 * std::sin(1.3 * i), 0.02 * std::cos(2.1 * i));
-    features.push_back({i, x_O, K.Project(T_PC_true.inverse() * (p + x_O))});
-  }
+  const std::vector<VisualFeature> features = FeaturesSeenFrom(T_PC_true, K, p);
   FilterParams params;
   params.pixel_sigma = 1.0;
   params.camera_position_sigma = 0.002;

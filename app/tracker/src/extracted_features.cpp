@@ -8,7 +8,8 @@
 namespace inhand::tracker_detail {
 
 ExtractedFeatures::ExtractedFeatures(const HandModel& hand, const ObjectModel& object, const FeatureParams& params)
-    : hand_(hand), object_(object), params_(params) {
+    : hand_(hand), object_(object), params_(params), centre_O_(object.Bounds().Center()),
+      radius_(0.5 * object.Bounds().Size().norm()) {
   params_.Validate();
 }
 
@@ -40,14 +41,13 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   if (!matched_well_) {
     p.search_radius = params_.max_search_radius;
   } else {
-    const Eigen::MatrixXd& P = f.covariance();
-    const Aabb box = object_.Bounds();
-    const Vec3 X_C = T_PC.inverse() * (f.T_PO() * box.Center());
+    const auto P = f.covariance();
+    const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);
     if (X_C.z() > 1e-3) {
       const Eigen::Matrix<double, 2, 3> J = K.ProjectJacobian(X_C) * T_PC.linear().transpose();
       const Eigen::Matrix2d S = J * P.topLeftCorner<3, 3>() * J.transpose();
       const double sigma_theta2 = Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(3, 3)).eigenvalues().maxCoeff();
-      const double r_px = 0.5 * box.Size().norm() * K.fx / X_C.z();
+      const double r_px = radius_ * K.fx / X_C.z();
       const double sigma2 = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvalues().maxCoeff() + r_px * r_px * sigma_theta2;
       p.search_radius = std::clamp(static_cast<int>(std::ceil(3.0 * std::sqrt(std::max(sigma2, 0.0)))), params_.search_radius,
                                    params_.max_search_radius);

@@ -25,6 +25,8 @@ class ExtractedFeatures {
   const HandModel& hand_;
   const ObjectModel& object_;
   FeatureParams params_;
+  Vec3 centre_O_;  // of the object's visual bounds, and half their diagonal (the search radius)
+  double radius_;
   std::unique_ptr<Renderer> renderer_;
   HandMeshes hand_meshes_;
   std::vector<int> object_meshes_;

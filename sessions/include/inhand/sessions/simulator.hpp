@@ -49,6 +49,8 @@ struct SimulateOptions {
   std::optional<Effects> effects;
   RealismParams realism;
 };
+// The effects a simulation runs with: `options.effects`, else the profile's own.
+Effects EffectsOf(const SimulateOptions& options);
 
 struct SimulationSummary {
   std::string session_dir;
