@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -93,12 +94,24 @@ MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs
     cv::arrowedLine(matches, P(m.virtual_px), P(m.real_px), col, 1, cv::LINE_AA, 0, 0.3);
     cv::circle(matches, P(m.real_px), 3, col, 1, cv::LINE_AA);
   }
+  // Step 0, when it ran: the whole object's shift, drawn from the virtual corners' centroid.
+  const bool global = std::isfinite(d.global_cost) && !d.virtual_corners.empty();
+  if (global) {
+    Vec2 c = Vec2::Zero();
+    for (const Vec2& v : d.virtual_corners) c += v;
+    c /= static_cast<double>(d.virtual_corners.size());
+    cv::arrowedLine(matches, P(c), P(c + d.global_shift), cv::Scalar(255, 220, 0), 2, cv::LINE_AA, 0, 0.2);
+    char text[96];
+    std::snprintf(text, sizeof text, "0. shift (%+.0f, %+.0f) px, chamfer %.1f px (unshifted %.1f)", d.global_shift.x(), d.global_shift.y(),
+                  d.global_cost, d.global_cost_unshifted);
+    cv::putText(matches, text, cv::Point(8, matches.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 220, 0), 1, cv::LINE_AA);
+  }
 
   {
     // Everything in one picture: 2 rows x 3 columns at half size.
     std::vector<std::pair<std::string, cv::Mat>> grid = {
         {"1. camera edges (Canny)", real_edges}, {"1. virtual edges (Canny)", virtual_edges}, {"2. Harris corners (virtual: kept green)", corners_virtual},
-        {"3. contour pieces", pieces}, {"4+5. matches (inliers green)", matches}, {"virtual view at the jtf estimate", virt}};
+        {"3. contour pieces", pieces}, {global ? "0. shift, 4+5. matches (inliers green)" : "4+5. matches (inliers green)", matches}, {"virtual view at the jtf estimate", virt}};
     std::vector<cv::Mat> rows, cells;
     for (std::size_t i = 0; i < grid.size(); ++i) {
       cv::Mat c;

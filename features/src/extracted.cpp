@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <opencv2/imgproc.hpp>
@@ -23,6 +24,8 @@ void FeatureParams::Validate() const {
   if (piece_radius < 3 || piece_radius > 100) fail("piece_radius", piece_radius, "in [3, 100]");
   if (search_radius < 1 || search_radius > 200) fail("search_radius", search_radius, "in [1, 200]");
   if (max_search_radius < search_radius || max_search_radius > 200) fail("max_search_radius", max_search_radius, "in [search_radius, 200]");
+  if (global_search_radius < 0 || global_search_radius > 200) fail("global_search_radius", global_search_radius, "in [0, 200]");
+  if (!(global_truncation >= 1 && global_truncation <= 100)) fail("global_truncation", global_truncation, "in [1, 100]");
   if (orientation_bins < 1 || orientation_bins > 64) fail("orientation_bins", orientation_bins, "in [1, 64]");
   if (!(min_vote_fraction > 0 && min_vote_fraction <= 1)) fail("min_vote_fraction", min_vote_fraction, "in (0, 1]");
   if (!(ransac_threshold > 0)) fail("ransac_threshold", ransac_threshold, "> 0");
@@ -111,6 +114,79 @@ std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p, co
   return out;
 }
 
+// Step 0: the shift that puts the virtual object's edge pixels (on `mask`) on the camera's edges
+// of the same orientation (±1 bin): the least mean of their truncated distances, searched every
+// 3 px, then every pixel around the best. Ties go to the smaller shift (deterministic).
+struct GlobalResult {
+  Vec2 shift = Vec2::Zero();
+  double cost = std::numeric_limits<double>::quiet_NaN();
+  double cost_unshifted = std::numeric_limits<double>::quiet_NaN();
+};
+
+GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve, const std::vector<std::uint8_t>* mask, const FeatureParams& p) {
+  constexpr std::size_t kMaxPixels = 1500;  // enough for a silhouette; bounds the search's cost
+  const int W = re.edges.cols, H = re.edges.rows, B = p.orientation_bins, G = p.global_search_radius;
+  const float tau = static_cast<float>(p.global_truncation);
+  struct Pixel {
+    int x, y, bin;
+  };
+  std::vector<Pixel> all;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x)
+      if (ve.edges.at<std::uint8_t>(y, x) && (mask == nullptr || (*mask)[std::size_t(y) * W + x]))
+        all.push_back({x, y, ve.orientation.at<std::uint8_t>(y, x)});
+  GlobalResult out;
+  if (all.empty()) return out;
+  const std::size_t stride = (all.size() + kMaxPixels - 1) / kMaxPixels;
+  std::vector<Pixel> px;
+  for (std::size_t i = 0; i < all.size(); i += stride) px.push_back(all[i]);
+  // Per orientation bin the virtual pixels use: the distance to the camera's edges of that bin
+  // or a neighbour, truncated.
+  std::vector<bool> used(static_cast<std::size_t>(B), false);
+  for (const Pixel& q : px) used[static_cast<std::size_t>(q.bin)] = true;
+  std::vector<cv::Mat> dt(static_cast<std::size_t>(B));
+  for (int b = 0; b < B; ++b) {
+    if (!used[static_cast<std::size_t>(b)]) continue;
+    cv::Mat free(H, W, CV_8U, cv::Scalar(255));
+    for (int y = 0; y < H; ++y) {
+      const std::uint8_t* e = re.edges.ptr<std::uint8_t>(y);
+      const std::uint8_t* o = re.orientation.ptr<std::uint8_t>(y);
+      std::uint8_t* f = free.ptr<std::uint8_t>(y);
+      for (int x = 0; x < W; ++x) {
+        if (!e[x]) continue;
+        const int d = std::abs(int(o[x]) - b);
+        if (std::min(d, B - d) <= 1) f[x] = 0;
+      }
+    }
+    cv::distanceTransform(free, dt[static_cast<std::size_t>(b)], cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    cv::min(dt[static_cast<std::size_t>(b)], tau, dt[static_cast<std::size_t>(b)]);
+  }
+  const auto cost = [&](int sx, int sy) {
+    double sum = 0.0;
+    for (const Pixel& q : px) {
+      const int x = q.x + sx, y = q.y + sy;
+      sum += (x < 0 || y < 0 || x >= W || y >= H) ? tau : dt[static_cast<std::size_t>(q.bin)].at<float>(y, x);
+    }
+    return sum / static_cast<double>(px.size());
+  };
+  int bx = 0, by = 0;
+  double best = cost(0, 0);
+  out.cost_unshifted = best;
+  const auto consider = [&](int sx, int sy) {
+    if (sx < -G || sx > G || sy < -G || sy > G) return;
+    const double c = cost(sx, sy);
+    if (c < best || (c == best && sx * sx + sy * sy < bx * bx + by * by)) best = c, bx = sx, by = sy;
+  };
+  for (int sy = -(G / 3) * 3; sy <= G; sy += 3)
+    for (int sx = -(G / 3) * 3; sx <= G; sx += 3) consider(sx, sy);
+  const int cx = bx, cy = by;
+  for (int sy = cy - 2; sy <= cy + 2; ++sy)
+    for (int sx = cx - 2; sx <= cx + 2; ++sx) consider(sx, sy);
+  out.shift = Vec2(bx, by);
+  out.cost = best;
+  return out;
+}
+
 }  // namespace
 
 std::vector<Vec2> EdgeCorners(const Image8& edges, const FeatureParams& p) {
@@ -145,6 +221,15 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     }
     grown.assign(g.data, g.data + g.total());
   }
+  // 0. One shift of the whole object, when asked to search far: the local searches start there.
+  int ox = 0, oy = 0;
+  if (p.global_search_radius > 0) {
+    const GlobalResult g = GlobalShift(re, ve, object_mask ? &grown : nullptr, p);
+    dbg.global_shift = g.shift;
+    dbg.global_cost = g.cost;
+    dbg.global_cost_unshifted = g.cost_unshifted;
+    ox = static_cast<int>(g.shift.x()), oy = static_cast<int>(g.shift.y());
+  }
   // 2. Harris on the edge images.
   if (camera_corners) dbg.real_corners = HarrisCorners(re.edges, p, nullptr, nullptr);
   dbg.virtual_corners = HarrisCorners(ve.edges, p, object_mask ? &grown : nullptr, &dbg.virtual_corners_rejected);
@@ -177,7 +262,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
       dbg.piece_rejected.push_back(static_cast<int>(i));
       continue;
     }
-    const int cx = static_cast<int>(dbg.virtual_corners[i].x()), cy = static_cast<int>(dbg.virtual_corners[i].y());
+    // The search window is centred at the corner moved by step 0's shift.
+    const int cx = static_cast<int>(dbg.virtual_corners[i].x()) + ox, cy = static_cast<int>(dbg.virtual_corners[i].y()) + oy;
     std::fill(acc.begin(), acc.end(), 0);
     // The real edge pixels any piece pixel can reach (within R + S of the corner), listed once
     // per corner by orientation bin: each vote pairs one of them with a piece pixel of an
@@ -226,7 +312,7 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     FeatureMatch m;
     m.id = static_cast<int>(i);
     m.virtual_px = dbg.virtual_corners[i];
-    m.real_px = m.virtual_px + Vec2(mx / wsum, my / wsum);
+    m.real_px = m.virtual_px + Vec2(ox + mx / wsum, oy + my / wsum);
     m.vote_fraction = fraction;
     result.matches.push_back(m);
   }

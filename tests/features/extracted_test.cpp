@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <limits>
 
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
@@ -84,6 +85,56 @@ TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
             << " mm, orientation " << rot_before * 180 / M_PI << " -> " << rot_after * 180 / M_PI << " deg\n";
   EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
   EXPECT_LT(rot_after, rot_before) << rot_before << " -> " << rot_after;
+}
+
+// Step 0: an estimate 30 mm off sideways puts the virtual object about 60 px from the camera's,
+// twice the local search. One shift of the whole object finds it (the projected offset of the
+// object's centre, within 5 px: the edges' best shift also absorbs the small rotation), and the
+// local searches around it then match as near ones do;
+// without step 0 the local searches find nothing true.
+TEST(ExtractedFeatures, AGlobalShiftBridgesAnOffsetBeyondTheLocalSearch) {
+  Pair p;
+  const Transform T_true = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, 0.15)));
+  const Vec3 side = p.T_PC.linear().col(0);  // the camera's x axis, in P
+  const Transform T_est = MakeTransform(0.03 * side + Vec3(0, 0, 0.004), ExpSO3(Vec3(0.01, -0.01, 0.02))) * T_true;
+  const RenderOutput real = p.Render(T_true), virt = p.Render(T_est);
+  std::vector<std::uint8_t> mask(virt.label.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = virt.label[i] == kObjectLabel;
+  const Vec3 centre_O = p.object.Bounds().Center();
+  const Transform T_CP = p.T_PC.inverse();
+  const Vec2 offset = p.K.Project(T_CP * (T_true * centre_O)) - p.K.Project(T_CP * (T_est * centre_O));
+  ASSERT_GT(offset.norm(), 50.0) << "the offset must lie beyond the local search";
+  // The median pixel error of the inliers against where their object points really project.
+  const auto median_error = [&](const MatchResult& r) {
+    std::vector<double> errors;
+    for (const FeatureMatch& m : r.matches) {
+      if (!m.inlier) continue;
+      const float z = virt.depth_at(static_cast<int>(std::lround(m.virtual_px.x())), static_cast<int>(std::lround(m.virtual_px.y())));
+      if (!std::isfinite(z)) continue;
+      const Vec3 x_O = T_est.inverse() * (p.T_PC * p.K.Unproject(m.virtual_px, z));
+      errors.push_back((p.K.Project(T_CP * (T_true * x_O)) - m.real_px).norm());
+    }
+    if (errors.empty()) return std::numeric_limits<double>::infinity();
+    std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2), errors.end());
+    return errors[errors.size() / 2];
+  };
+  FeatureParams local;
+  const MatchResult near = MatchFeatures(real.colour, virt.colour, &mask, local);
+  EXPECT_FALSE(std::isfinite(near.debug.global_cost)) << "step 0 runs only when asked";
+  EXPECT_TRUE(near.num_inliers() < 3 || median_error(near) > 5.0) << near.num_inliers() << " inliers, median error " << median_error(near);
+  FeatureParams global;
+  global.global_search_radius = 90;
+  const MatchResult far = MatchFeatures(real.colour, virt.colour, &mask, global);
+  std::cout << "  offset (" << offset.transpose() << ") px, step 0 shift (" << far.debug.global_shift.transpose() << "), chamfer "
+            << far.debug.global_cost << " px (unshifted " << far.debug.global_cost_unshifted << "); " << far.num_inliers()
+            << " inliers, median error " << median_error(far) << " px\n";
+  EXPECT_LT((far.debug.global_shift - offset).norm(), 5.0);
+  EXPECT_LT(far.debug.global_cost, 0.5 * far.debug.global_cost_unshifted);
+  ASSERT_GE(far.num_inliers(), 6);
+  EXPECT_LT(median_error(far), 1.5);
+  FeatureParams bad = global;
+  bad.global_truncation = 0.5;
+  EXPECT_THROW(MatchFeatures(real.colour, virt.colour, &mask, bad), InputError);
 }
 
 // Corners near an occluder (a finger across the object) are junctions of its edges with the

@@ -35,12 +35,14 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   }
   // Search as far as the estimate is uncertain: 3σ of the pixel of the object's centre (its
   // position, and its orientation at the object's radius), within [search_radius,
-  // max_search_radius], and as far as allowed until a frame has matched well: a first match that
-  // bridges a start far off (even one the start's σ does not admit), local once it has converged.
+  // max_search_radius], and that far until a frame has matched well. That first match must bridge
+  // a start far off (even one the start's σ does not admit): it searches one shift of the whole
+  // object that far (features/extracted.hpp, step 0) and each corner locally around it; each
+  // corner searching on its own within 90 px matched clutter (a start 40 mm off fused 60 mm off).
   FeatureParams p = params_;
-  if (!matched_well_) {
-    p.search_radius = params_.max_search_radius;
-  } else {
+  int radius = params_.max_search_radius;
+  if (matched_well_) {
+    radius = params_.search_radius;
     const auto P = f.covariance();
     const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);
     if (X_C.z() > 1e-3) {
@@ -49,11 +51,16 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
       const double sigma_theta2 = Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(3, 3)).eigenvalues().maxCoeff();
       const double r_px = radius_ * K.fx / X_C.z();
       const double sigma2 = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvalues().maxCoeff() + r_px * r_px * sigma_theta2;
-      p.search_radius = std::clamp(static_cast<int>(std::ceil(3.0 * std::sqrt(std::max(sigma2, 0.0)))), params_.search_radius,
-                                   params_.max_search_radius);
+      radius = std::clamp(static_cast<int>(std::ceil(3.0 * std::sqrt(std::max(sigma2, 0.0)))), params_.search_radius,
+                          params_.max_search_radius);
     }
   }
-  step.search_radius = p.search_radius;
+  if (!matched_well_ && radius > params_.search_radius)
+    p.global_search_radius = radius;  // one shift of the whole object, then each corner locally
+  else
+    p.search_radius = radius;  // each corner on its own: searched globally on every uncertain
+                               // frame, realistic shampoo's visual step took 62 ms, not 15
+  step.search_radius = radius;
   step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false);  // no debug-only camera corners
   // Inliers to object points through the virtual depth, moved into O with the estimate.
   const Transform T_OP = f.T_PO().inverse();

@@ -43,7 +43,7 @@ const std::vector<Field<FeatureParams>>& FeatureFields() {
       {"max_corners", nullptr, &F::max_corners}, {"min_corner_distance", &F::min_corner_distance},
       {"occluder_clearance", nullptr, &F::occluder_clearance}, {"piece_radius", nullptr, &F::piece_radius},
       {"min_piece_pixels", nullptr, &F::min_piece_pixels}, {"search_radius", nullptr, &F::search_radius},
-      {"max_search_radius", nullptr, &F::max_search_radius},
+      {"max_search_radius", nullptr, &F::max_search_radius}, {"global_truncation", &F::global_truncation},
       {"orientation_bins", nullptr, &F::orientation_bins}, {"min_vote_fraction", &F::min_vote_fraction},
       {"ransac_threshold", &F::ransac_threshold}, {"ransac_iterations", nullptr, &F::ransac_iterations},
       {"seed", nullptr, nullptr, nullptr, &F::seed}};

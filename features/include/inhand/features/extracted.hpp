@@ -1,6 +1,10 @@
 #pragma once
 // Extracted features, the paper's five steps between the camera image and the virtual image
-// rendered at the current estimate (estimator-math.md, "Visual update"):
+// rendered at the current estimate (estimator-math.md, "Visual update"), and optionally a step
+// before them that finds the whole object far off (global_search_radius):
+//   0. one shift of the object       → the virtual object's edges placed on the camera's edges
+//                                          by an oriented chamfer over a wide window; the
+//                                          local searches of step 4 start from it
 //   1. Canny on both images            → edge images
 //   2. Harris on the edge images        → corners (virtual: on the object only)
 //   3. contour pieces around the corners → the virtual edge pixels within a radius
@@ -10,6 +14,7 @@
 //   5. RANSAC                            → matches consistent with one image similarity
 // Every stage keeps its rejects for the matching debug views. Deterministic (seeded).
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -38,6 +43,13 @@ struct FeatureParams {
                                      // predicted pixel while the estimate is uncertain (a start
                                      // 40 mm off is 45 px at 0.5 m), up to this; = search_radius
                                      // keeps it fixed
+  int global_search_radius = 0;      // [px] > 0: step 0 searches one shift of the whole object
+                                     // within this, and step 4 searches search_radius around
+                                     // it (each corner on its own within a window this wide
+                                     // matched clutter: a start 40 mm off was fused 60 mm off)
+  double global_truncation = 8.0;    // [px] step 0's chamfer: a virtual edge pixel costs its
+                                     // distance to the nearest camera edge of its orientation
+                                     // (±1 bin), at most this
   int orientation_bins = 12;         // gradient-direction bins (mod π); neighbours may vote
   double min_vote_fraction = 0.35;   // votes of the peak over the piece's pixels
   double ransac_threshold = 2.5;     // [px]
@@ -64,6 +76,11 @@ struct MatchDebug {
   std::vector<Image8> votes;                        // per corner, the Hough accumulator (grey)
   std::vector<int> vote_rejected;                   // corner ids whose peak was too weak
   Eigen::Matrix<double, 2, 3> similarity = Eigen::Matrix<double, 2, 3>::Zero();  // RANSAC model
+  // Step 0 (global_search_radius > 0): the shift [px] and its mean chamfer cost [px], and the
+  // cost without a shift; costs are NaN when step 0 did not run or the object has no edges.
+  Vec2 global_shift = Vec2::Zero();
+  double global_cost = std::numeric_limits<double>::quiet_NaN();
+  double global_cost_unshifted = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct MatchResult {

@@ -80,7 +80,9 @@ struct VisualStep {
   bool has_features = false;
   RenderOutput virtual_view;
   MatchResult match;
-  int search_radius = 0;           // [px] the Hough search used (widened while uncertain)
+  int search_radius = 0;           // [px] how far the object was searched (widened while
+                                   // uncertain; beyond FeatureParams::search_radius, match.debug
+                                   // has the global shift)
   std::vector<int> used_match;     // index into match.matches
   std::vector<double> residual_before, residual_after;  // [px]
 };
