@@ -4,16 +4,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "inhand/core/error.hpp"
+#include "inhand/io/detail/json_fields.hpp"
+#include "inhand/io/mesh_io.hpp"
 #include "inhand/renderer/renderer.hpp"
 #include "inhand/renderer/views.hpp"
 
 namespace inhand {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -66,6 +71,7 @@ const char* EffectName(Effect e) {
     case Effect::kCameraSensorNoise: return "camera.sensor_noise";
     case Effect::kCameraJpeg: return "camera.jpeg";
     case Effect::kCameraIntrinsics: return "camera.intrinsics";
+    case Effect::kObjectMesh: return "object.mesh";
     case Effect::kCount: break;
   }
   return "?";
@@ -109,9 +115,9 @@ Effects Effects::Without(const Effects& other) const {
   return e;
 }
 
-bool Effects::AnyCamera() const {
-  for (std::size_t i = static_cast<std::size_t>(Effect::kCameraLight); i < kNumEffects; ++i)
-    if (bits_[i] && static_cast<Effect>(i) != Effect::kCameraIntrinsics) return true;
+bool Effects::AnyCamera() const {  // light to JPEG: the intrinsics' error needs no simulation
+  for (std::size_t i = static_cast<std::size_t>(Effect::kCameraLight); i <= static_cast<std::size_t>(Effect::kCameraJpeg); ++i)
+    if (bits_[i]) return true;
   return false;
 }
 
@@ -145,6 +151,45 @@ ObjectModel ScaledObject(const ObjectModel& object, const Vec3& s) {
   w.field_cache.clear();
   w.decomposition = object.decomposition + ", scaled";
   return w;
+}
+
+SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& object_json, const std::string& object_dir,
+                              const RealismParams& params) {
+  SimplifiedModel out;
+  std::vector<TriangleMesh> meshes;
+  std::vector<std::string> textures;
+  for (std::size_t i = 0; i < model.visual.size(); ++i) {
+    const TriangleMesh& m = model.visual[i];
+    const auto target = static_cast<std::size_t>(std::ceil(params.simplify_fraction * static_cast<double>(m.num_triangles())));
+    meshes.push_back(SimplifyMesh(m, target, params.simplify_error));
+    out.triangles_before += m.num_triangles();
+    out.triangles_after += meshes.back().num_triangles();
+    std::string texture;
+    if (!m.material.texture_file.empty()) {
+      texture = fs::relative(m.material.texture_file, object_dir).generic_string();
+    } else if (!m.material.texture_blob.empty()) {
+      texture = "simplified_texture_" + std::to_string(i) + ".png";
+      out.files.emplace_back(texture, std::string(m.material.texture_blob.begin(), m.material.texture_blob.end()));
+    }
+    textures.push_back(texture);
+  }
+  const ObjText text = MeshesObjText(meshes, "simplified.mtl", textures);
+  const std::vector<ConvexPiece> pieces = SlabHulls(meshes, params.slab, params.max_slabs, model.name + " (simplified)");
+  out.pieces_before = model.pieces.size();
+  out.pieces_after = pieces.size();
+  jsonf::Json doc;
+  try {
+    doc = jsonf::Json::parse(object_json);
+  } catch (const std::exception& e) {
+    throw InputError(model.source + ": " + e.what());
+  }
+  doc["visual"] = jsonf::Json::array({{{"mesh", "simplified.obj"}}});
+  doc["collision"] = jsonf::Json::array({{{"mesh", "simplified_pieces.obj"}, {"method", "components"}}});
+  out.files.emplace_back("simplified.obj", text.obj);
+  out.files.emplace_back("simplified.mtl", text.mtl);
+  out.files.emplace_back("simplified_pieces.obj", PiecesObjText(pieces));
+  out.files.emplace_back("object.json", doc.dump(2) + "\n");
+  return out;
 }
 
 void TintObject(ObjectModel& object, const Vec3& gains) {

@@ -232,6 +232,10 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     for (int c = 0; c < 3; ++c) colour_gains[c] = 1.0 + rp.colour_sigma * gauss(r);
     TintObject(object, colour_gains);
   }
+  // The estimator's model is simplified, the world keeps the detailed one.
+  std::optional<SimplifiedModel> simplified;
+  if (effects.Has(Effect::kObjectMesh))
+    simplified = SimplifyModel(model_object, ReadBinary(object_dir / "object.json"), object_dir.string(), rp);
   std::vector<Vec3> joint_origin_offsets;
   HandModel hand = model_hand;
   if (effects.Has(Effect::kHandGeometry)) {
@@ -432,6 +436,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     writer = std::make_unique<SessionWriter>(opt.out_dir, info, model_hand.QNames(), opt.overwrite);
     CopyFolder(*writer, hand_dir, "model/hand");
     CopyFolder(*writer, object_dir, "model/object");
+    if (simplified)
+      for (const auto& [name, contents] : simplified->files) writer->AddFile("model/object/" + name, contents);
   };
 
   // Truth for diagnostics and the plausibility checks.
@@ -588,6 +594,9 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   realism["world_object_size_m"] = {world_size.x(), world_size.y(), world_size.z()};
   realism["model_object_size_m"] = {model_size.x(), model_size.y(), model_size.z()};
   if (effects.Has(Effect::kObjectScale)) realism["object_scale"] = {object_scale.x(), object_scale.y(), object_scale.z()};
+  if (simplified)
+    realism["simplified_model"] = {{"triangles", simplified->triangles_after}, {"model_triangles", simplified->triangles_before},
+                                   {"pieces", simplified->pieces_after}, {"model_pieces", simplified->pieces_before}};
   if (effects.Has(Effect::kObjectColour)) realism["colour_gains_rgb"] = {colour_gains.x(), colour_gains.y(), colour_gains.z()};
   if (effects.Has(Effect::kObjectTags)) {
     jsonf::Json tags = jsonf::Json::array();

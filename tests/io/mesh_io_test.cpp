@@ -75,6 +75,62 @@ TEST(MeshIo, ObjWithMaterialsTextureAndTrailingSpace) {
   }
 }
 
+// What MeshesObjText writes, assimp reads back: positions, uvs, colours, opacity, texture.
+TEST(MeshIo, WrittenObjReadsBackThroughAssimp) {
+  test::TempDir dir;
+  dir.Write("tex.png", "a texture file");
+  TriangleMesh a = ConvexPiece::Box(Vec3(0.01, 0.02, 0.03), MakeTransform(Vec3(0.1, 0, 0), Mat3::Identity())).ToMesh();
+  a.uvs.clear();
+  for (const Vec3& v : a.vertices) a.uvs.emplace_back(v.y() > 0 ? 1.0 : 0.0, v.z() > 0 ? 0.75 : 0.25);
+  a.material.rgba = Eigen::Vector4d(0.9, 0.2, 0.1, 1.0);
+  TriangleMesh b = ConvexPiece::Sphere(0.02, Transform::Identity()).ToMesh();
+  b.material.rgba = Eigen::Vector4d(0.1, 0.3, 0.8, 0.5);
+  const ObjText text = MeshesObjText({a, b}, "parts.mtl", {"tex.png", ""});
+  dir.Write("parts.obj", text.obj);
+  dir.Write("parts.mtl", text.mtl);
+  const auto back = LoadMeshFile(dir / "parts.obj");
+  ASSERT_EQ(back.size(), 2u);
+  const TriangleMesh& ta = back[0].material.HasTexture() ? back[0] : back[1];
+  const TriangleMesh& tb = &ta == &back[0] ? back[1] : back[0];
+  EXPECT_EQ(ta.material.texture_file, std::filesystem::weakly_canonical(dir / "tex.png").string());
+  EXPECT_EQ(ta.num_triangles(), a.num_triangles());
+  EXPECT_EQ(tb.num_triangles(), b.num_triangles());
+  EXPECT_LT((ta.material.rgba - a.material.rgba).norm(), 1e-6);
+  EXPECT_LT((tb.material.rgba - b.material.rgba).norm(), 1e-6);
+  // Every written vertex is read with its uv (assimp may flip v; ours are symmetric about 0.5).
+  for (std::size_t i = 0; i < a.vertices.size(); ++i) {
+    bool found = false;
+    for (std::size_t j = 0; j < ta.vertices.size() && !found; ++j)
+      found = (ta.vertices[j] - a.vertices[i]).norm() < 1e-8 && std::abs(ta.uvs[j].x() - a.uvs[i].x()) < 1e-8;
+    EXPECT_TRUE(found) << "vertex " << i;
+  }
+  EXPECT_NEAR(ComputeMassProperties({&tb}).volume, ComputeMassProperties({&b}).volume, 1e-12);
+}
+
+// Slabs of a convex solid are exact pieces of it: a cylinder 100 mm long in 20 mm slabs is five
+// hulls whose volumes add up to the cylinder's (0.03 % lost to the hull computer's rounding);
+// at most max_slabs are cut.
+TEST(MeshIo, SlabHullsCutASolidAcrossItsLongestAxis) {
+  const TriangleMesh cyl = ConvexPiece::Cylinder(0.015, 0.05, MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, M_PI / 2, 0)))).ToMesh();
+  const double v = ComputeMassProperties({&cyl}).volume;
+  const std::vector<ConvexPiece> five = SlabHulls({cyl}, 0.02, 8, "cylinder");
+  ASSERT_EQ(five.size(), 5u);
+  double sum = 0.0;
+  for (const ConvexPiece& p : five) {
+    const TriangleMesh hull = p.ToMesh();
+    sum += ComputeMassProperties({&hull}).volume;
+    const Aabb box = hull.Bounds();
+    EXPECT_NEAR(box.Size().x(), 0.02, 1e-9) << "cut across x, the longest axis";
+  }
+  EXPECT_NEAR(sum / v, 1.0, 1e-3);  // Bullet's hull computer rounds its vertices a little
+  EXPECT_EQ(SlabHulls({cyl}, 0.005, 8, "cylinder").size(), 8u);
+  // A flat mesh encloses nothing.
+  TriangleMesh flat;
+  flat.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  flat.triangles = {Eigen::Vector3i(0, 1, 2)};
+  EXPECT_THROW(SlabHulls({flat}, 0.02, 8, "flat"), InputError);
+}
+
 TEST(MeshIo, ColladaUnitScaleAppliedAndUpAxisIgnored) {
   test::TempDir dir;
   // One triangle in millimetres, Z_UP: metres out, axes unchanged.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -286,6 +287,65 @@ TEST(RealisticSimulation, WorldObjectAndHandAreNotTheModels) {
   // The session still carries the nominal models.
   EXPECT_EQ(test::ReadFile(dir / "s/model/object/ketchup_bottle.obj"), test::ReadFile(test::ProjectAsset("objects/ketchup_bottle/ketchup_bottle.obj")));
   EXPECT_EQ(test::ReadFile(dir / "s/model/hand/inhand_hand.urdf"), test::ReadFile(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf")));
+}
+
+// The estimator's object is a simplified mesh with its own decomposition; the world's is the
+// detailed one. The effect left out, the session's object.json is the model's, byte for byte.
+TEST(RealisticSimulation, TheEstimatorGetsASimplifiedMeshWithItsOwnPieces) {
+  test::TempDir dir;
+  Sim(dir / "s", "object.mesh", 0.2);
+  const ObjectModel nominal = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  const ObjectModel model = LoadObjectModel(dir / "s/model/object/object.json");
+  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json")).at("realism").at("simplified_model");
+  EXPECT_EQ(t.at("model_triangles").get<std::size_t>(), nominal.NumVisualTriangles());
+  EXPECT_EQ(t.at("triangles").get<std::size_t>(), model.NumVisualTriangles());
+  EXPECT_LT(model.NumVisualTriangles(), 0.7 * static_cast<double>(nominal.NumVisualTriangles()));
+  EXPECT_EQ(t.at("pieces").get<std::size_t>(), model.pieces.size());
+  EXPECT_NE(model.pieces.size(), nominal.pieces.size());
+  // Every vertex kept is a vertex of the detailed mesh, with its uv: the label stays in place.
+  std::size_t textured = 0;
+  for (const TriangleMesh& m : model.visual) {
+    textured += m.material.HasTexture() ? 1 : 0;
+    for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+      bool found = false;
+      for (const TriangleMesh& n : nominal.visual)
+        for (std::size_t j = 0; j < n.vertices.size() && !found; ++j)
+          found = (m.vertices[i] - n.vertices[j]).norm() < 1e-8 && (m.uvs.empty() || (m.uvs[i] - n.uvs[j]).norm() < 1e-8);
+      ASSERT_TRUE(found) << "simplified vertex " << i << " is not a model vertex";
+    }
+  }
+  EXPECT_GE(textured, 1u);
+  std::vector<const TriangleMesh*> a, b;
+  for (const TriangleMesh& m : nominal.visual) a.push_back(&m);
+  for (const TriangleMesh& m : model.visual) b.push_back(&m);
+  const double v_nominal = ComputeMassProperties(a).volume, v_model = ComputeMassProperties(b).volume;
+  EXPECT_NEAR(v_model / v_nominal, 1.0, 0.02);
+  // The pieces enclose the simplified surface (within 0.1 mm) and its volume (within 3 %).
+  double v_pieces = 0.0;
+  for (const ConvexPiece& p : model.pieces) {
+    const TriangleMesh hull = p.ToMesh();
+    v_pieces += ComputeMassProperties({&hull}).volume;
+  }
+  EXPECT_NEAR(v_pieces / v_model, 1.0, 0.03);
+  for (const TriangleMesh& m : model.visual)
+    for (const Vec3& v : m.vertices) {
+      double outside = std::numeric_limits<double>::infinity();  // least over the pieces
+      for (const ConvexPiece& p : model.pieces) {
+        double d = -std::numeric_limits<double>::infinity();  // most over the hull's planes
+        for (const auto& tri : p.hull_triangles) {
+          const Vec3& q0 = p.hull_vertices[static_cast<std::size_t>(tri[0])];
+          const Vec3 n = (p.hull_vertices[static_cast<std::size_t>(tri[1])] - q0).cross(p.hull_vertices[static_cast<std::size_t>(tri[2])] - q0);
+          if (n.norm() > 0) d = std::max(d, n.normalized().dot(v - q0));
+        }
+        outside = std::min(outside, d);
+      }
+      ASSERT_LT(outside, 1e-4) << "a surface vertex outside every piece";
+    }
+  // The world collides and renders the detailed mesh: with the effect off the session's model is
+  // the asset's.
+  Sim(dir / "n", "object.scale", 0.2);
+  EXPECT_EQ(test::ReadFile(dir / "n/model/object/object.json"), test::ReadFile(test::ProjectAsset("objects/ketchup_bottle/object.json")));
+  EXPECT_FALSE(fs::exists(dir / "n/model/object/simplified.obj"));
 }
 
 TEST(RealisticSimulation, SameSeedGivesByteIdenticalSessionsWithEveryEffect) {

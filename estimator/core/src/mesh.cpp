@@ -1,10 +1,14 @@
 #include "inhand/core/mesh.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <queue>
+#include <set>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 
 #include "inhand/core/error.hpp"
@@ -271,6 +275,129 @@ void RoundShape(double radius, double half_length, std::vector<Vec3>& v,
 }
 
 }  // namespace
+
+TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles, double max_error) {
+  mesh.Validate("SimplifyMesh");
+  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  std::vector<Eigen::Vector3i> tris = mesh.triangles;
+  std::vector<bool> tri_alive(nt, true), vert_alive(nv, true), locked(nv, false);
+  std::vector<std::vector<int>> incident(nv);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) incident[static_cast<std::size_t>(tris[t][k])].push_back(static_cast<int>(t));
+  std::map<std::pair<int, int>, int> edge_uses;
+  for (const Eigen::Vector3i& t : tris)
+    for (int k = 0; k < 3; ++k) ++edge_uses[std::minmax(t[k], t[(k + 1) % 3])];
+  for (const auto& [e, uses] : edge_uses)
+    if (uses != 2) locked[static_cast<std::size_t>(e.first)] = locked[static_cast<std::size_t>(e.second)] = true;
+  // Plane quadrics, one per triangle, summed at its vertices.
+  std::vector<Eigen::Matrix4d> Q(nv, Eigen::Matrix4d::Zero());
+  const auto normal_of = [&](const Eigen::Vector3i& t) {
+    const Vec3& a = mesh.vertices[static_cast<std::size_t>(t[0])];
+    return Vec3((mesh.vertices[static_cast<std::size_t>(t[1])] - a).cross(mesh.vertices[static_cast<std::size_t>(t[2])] - a));
+  };
+  for (const Eigen::Vector3i& t : tris) {
+    const Vec3 n = normal_of(t);
+    if (!(n.norm() > 0.0)) continue;
+    Eigen::Vector4d plane;
+    plane << n.normalized(), -n.normalized().dot(mesh.vertices[static_cast<std::size_t>(t[0])]);
+    for (int k = 0; k < 3; ++k) Q[static_cast<std::size_t>(t[k])] += plane * plane.transpose();
+  }
+  const auto neighbours = [&](int v) {
+    std::set<int> out;
+    for (int t : incident[static_cast<std::size_t>(v)])
+      if (tri_alive[static_cast<std::size_t>(t)])
+        for (int k = 0; k < 3; ++k)
+          if (tris[static_cast<std::size_t>(t)][k] != v) out.insert(tris[static_cast<std::size_t>(t)][k]);
+    return out;
+  };
+  struct Candidate {
+    double cost;
+    int u, v;  // u collapses onto v
+    unsigned stamp_u, stamp_v;
+    bool operator<(const Candidate& o) const {  // min-heap; ties by index (deterministic)
+      if (cost != o.cost) return cost > o.cost;
+      return std::tie(u, v) > std::tie(o.u, o.v);
+    }
+  };
+  std::vector<unsigned> stamp(nv, 0);
+  std::priority_queue<Candidate> heap;
+  const auto push = [&](int u, int v) {
+    if (locked[static_cast<std::size_t>(u)]) return;
+    Eigen::Vector4d x;
+    x << mesh.vertices[static_cast<std::size_t>(v)], 1.0;
+    const double cost = x.dot((Q[static_cast<std::size_t>(u)] + Q[static_cast<std::size_t>(v)]) * x);
+    heap.push({std::max(cost, 0.0), u, v, stamp[static_cast<std::size_t>(u)], stamp[static_cast<std::size_t>(v)]});
+  };
+  for (const auto& [e, uses] : edge_uses) push(e.first, e.second), push(e.second, e.first);
+  std::size_t alive = nt;
+  const double limit = max_error * max_error;
+  while (alive > target_triangles && !heap.empty()) {
+    const Candidate c = heap.top();
+    heap.pop();
+    const std::size_t u = static_cast<std::size_t>(c.u), v = static_cast<std::size_t>(c.v);
+    if (!vert_alive[u] || !vert_alive[v] || stamp[u] != c.stamp_u || stamp[v] != c.stamp_v) continue;  // stale
+    if (c.cost > limit) break;
+    // Link condition: the two vertices share exactly the neighbours across their edge.
+    const std::set<int> nu = neighbours(c.u), nvs = neighbours(c.v);
+    int shared = 0, across = 0;
+    for (int w : nu) shared += nvs.count(w) ? 1 : 0;
+    for (int t : incident[u])
+      if (tri_alive[static_cast<std::size_t>(t)] && (tris[static_cast<std::size_t>(t)].array() == c.v).any()) ++across;
+    if (across != 2 || shared != 2) continue;
+    // No triangle may flip or flatten.
+    bool ok = true;
+    for (int t : incident[u]) {
+      const Eigen::Vector3i& tri = tris[static_cast<std::size_t>(t)];
+      if (!tri_alive[static_cast<std::size_t>(t)] || (tri.array() == c.v).any()) continue;
+      Eigen::Vector3i moved = tri;
+      for (int k = 0; k < 3; ++k)
+        if (moved[k] == c.u) moved[k] = c.v;
+      const Vec3 before = normal_of(tri), after = normal_of(moved);
+      if (!(after.norm() > 1e-3 * before.norm()) || after.normalized().dot(before.normalized()) < 0.2) ok = false;
+    }
+    if (!ok) continue;
+    for (int t : incident[u]) {
+      Eigen::Vector3i& tri = tris[static_cast<std::size_t>(t)];
+      if (!tri_alive[static_cast<std::size_t>(t)]) continue;
+      if ((tri.array() == c.v).any()) {
+        tri_alive[static_cast<std::size_t>(t)] = false;
+        --alive;
+        continue;
+      }
+      for (int k = 0; k < 3; ++k)
+        if (tri[k] == c.u) tri[k] = c.v;
+      incident[v].push_back(t);
+    }
+    vert_alive[u] = false;
+    Q[v] += Q[u];
+    const std::set<int> around = neighbours(c.v);
+    ++stamp[v];
+    for (int w : around) ++stamp[static_cast<std::size_t>(w)];
+    for (int w : around) {
+      push(w, c.v), push(c.v, w);
+      for (int x : neighbours(w)) push(w, x);  // w's quadric did not change, but its stamp did
+    }
+  }
+  TriangleMesh out;
+  out.material = mesh.material;
+  std::vector<int> index(nv, -1);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!tri_alive[t]) continue;
+    Eigen::Vector3i tri;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t i = static_cast<std::size_t>(tris[t][k]);
+      if (index[i] < 0) {
+        index[i] = static_cast<int>(out.vertices.size());
+        out.vertices.push_back(mesh.vertices[i]);
+        if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[i]);
+        if (!mesh.uvs.empty()) out.uvs.push_back(mesh.uvs[i]);
+      }
+      tri[k] = index[i];
+    }
+    out.triangles.push_back(tri);
+  }
+  return out;
+}
 
 ConvexPiece ConvexPiece::Box(const Vec3& h, const Transform& T_BS) {
   ConvexPiece p;

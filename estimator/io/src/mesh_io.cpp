@@ -7,6 +7,7 @@
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -250,23 +251,107 @@ std::vector<ConvexPiece> ReadPiecesObj(const std::string& path, const std::strin
 
 }  // namespace
 
+std::string PiecesObjText(const std::vector<ConvexPiece>& pieces) {
+  std::ostringstream out;
+  out << std::setprecision(17) << "# convex pieces written by inhand\n";
+  int base = 1;
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    out << "o piece_" << i << "\n";
+    for (const Vec3& v : pieces[i].hull_vertices) out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << "\n";
+    for (const auto& t : pieces[i].hull_triangles) out << "f " << base + t[0] << ' ' << base + t[1] << ' ' << base + t[2] << "\n";
+    base += static_cast<int>(pieces[i].hull_vertices.size());
+  }
+  return out.str();
+}
+
 void WritePiecesObj(const std::vector<ConvexPiece>& pieces, const std::string& path) {
   const fs::path tmp = path + ".tmp";
   {
     std::ofstream out(tmp);
     if (!out) throw InputError(path + ": cannot write");
-    out << std::setprecision(17) << "# convex pieces written by inhand\n";
-    int base = 1;
-    for (std::size_t i = 0; i < pieces.size(); ++i) {
-      out << "o piece_" << i << "\n";
-      for (const Vec3& v : pieces[i].hull_vertices)
-        out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << "\n";
-      for (const auto& t : pieces[i].hull_triangles)
-        out << "f " << base + t[0] << ' ' << base + t[1] << ' ' << base + t[2] << "\n";
-      base += static_cast<int>(pieces[i].hull_vertices.size());
-    }
+    out << PiecesObjText(pieces);
+    if (!out) throw InputError(path + ": cannot write");
   }
   fs::rename(tmp, path);
+}
+
+ObjText MeshesObjText(const std::vector<TriangleMesh>& meshes, const std::string& mtl_name,
+                      const std::vector<std::string>& texture_names) {
+  INHAND_CHECK(texture_names.size() == meshes.size(), "one texture name per mesh");
+  std::ostringstream obj, mtl;
+  obj << std::setprecision(9) << "# written by inhand\nmtllib " << mtl_name << "\n";
+  mtl << std::setprecision(9) << "# written by inhand\n";
+  std::size_t base_v = 1, base_t = 1, base_n = 1;
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const TriangleMesh& m = meshes[i];
+    m.Validate("MeshesObjText");
+    const std::string material = "material_" + std::to_string(i);
+    mtl << "newmtl " << material << "\nKd " << m.material.rgba[0] << ' ' << m.material.rgba[1] << ' ' << m.material.rgba[2]
+        << "\nd " << m.material.rgba[3] << "\n";
+    if (!texture_names[i].empty()) mtl << "map_Kd " << texture_names[i] << "\n";
+    obj << "g part_" << i << "\nusemtl " << material << "\n";
+    for (const Vec3& v : m.vertices) obj << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << "\n";
+    for (const Vec2& t : m.uvs) obj << "vt " << t.x() << ' ' << t.y() << "\n";
+    for (const Vec3& n : m.normals) obj << "vn " << n.x() << ' ' << n.y() << ' ' << n.z() << "\n";
+    const bool uv = !m.uvs.empty(), normal = !m.normals.empty();
+    for (const Eigen::Vector3i& t : m.triangles) {
+      obj << "f";
+      for (int k = 0; k < 3; ++k) {
+        obj << ' ' << base_v + static_cast<std::size_t>(t[k]);
+        if (uv || normal) obj << '/';
+        if (uv) obj << base_t + static_cast<std::size_t>(t[k]);
+        if (normal) obj << '/' << base_n + static_cast<std::size_t>(t[k]);
+      }
+      obj << "\n";
+    }
+    base_v += m.vertices.size(), base_t += m.uvs.size(), base_n += m.normals.size();
+  }
+  return {obj.str(), mtl.str()};
+}
+
+std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, double slab, int max_slabs,
+                                   const std::string& source) {
+  INHAND_CHECK(slab > 0.0 && max_slabs >= 1, "slab thickness and count must be positive");
+  TriangleMesh all;
+  for (const TriangleMesh& m : meshes) {
+    const int base = static_cast<int>(all.vertices.size());
+    all.vertices.insert(all.vertices.end(), m.vertices.begin(), m.vertices.end());
+    for (const Eigen::Vector3i& t : m.triangles) all.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+  }
+  std::vector<ConvexPiece> pieces;
+  int index = 0;
+  for (const TriangleMesh& solid : ConnectedComponents(all, 1e-7)) {
+    const Aabb box = solid.Bounds();
+    int axis = 0;
+    box.Size().maxCoeff(&axis);
+    const double lo = box.min[axis], length = box.Size()[axis];
+    const int count = std::clamp(static_cast<int>(std::lround(length / slab)), 1, max_slabs);
+    for (int k = 0; k < count; ++k) {
+      const double a = lo + length * k / count, b = lo + length * (k + 1) / count;
+      const double eps = 1e-9 * std::max(1.0, length);
+      std::vector<Vec3> points;
+      for (const Vec3& v : solid.vertices)
+        if (v[axis] >= a - eps && v[axis] <= b + eps) points.push_back(v);
+      for (const Eigen::Vector3i& t : solid.triangles)
+        for (int e = 0; e < 3; ++e) {
+          const Vec3& p = solid.vertices[static_cast<std::size_t>(t[e])];
+          const Vec3& q = solid.vertices[static_cast<std::size_t>(t[(e + 1) % 3])];
+          for (const double plane : {a, b})
+            if ((p[axis] - plane) * (q[axis] - plane) < 0.0) points.push_back(p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis])));
+        }
+      const std::string where = source + " (solid " + std::to_string(index) + ", slab " + std::to_string(k) + ")";
+      if (points.size() < 4) continue;
+      try {
+        pieces.push_back(ComputeConvexHull(points, where));
+        pieces.back().source = where;
+      } catch (const InputError&) {
+        // too thin to enclose a volume
+      }
+    }
+    ++index;
+  }
+  if (pieces.empty()) throw InputError(source + ": no slab encloses a volume");
+  return pieces;
 }
 
 std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParams& params,

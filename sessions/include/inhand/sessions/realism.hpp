@@ -4,7 +4,8 @@
 // numbers are RealismParams' defaults, documented in sessions/FORMAT.md.
 //
 //  - The object is not its model: per-axis scale, tags glued off their declared placement,
-//    slightly different colours and label texture.
+//    slightly different colours and label texture; the estimator gets a simplified mesh with a
+//    convex decomposition of its own.
 //  - The hand is not its URDF: joint origins off, joints that deflect under load (the encoder
 //    reads the motor side), soft fingertip pads.
 //  - The torques are not the contact part: drifting offsets, friction and gravity residue, lag.
@@ -31,6 +32,7 @@ enum class Effect {
   kTorqueDrift, kTorqueResidue, kTorqueLag,
   kCameraLight, kCameraExposure, kCameraVignetting, kCameraDistortion, kCameraMotionBlur,
   kCameraSensorNoise, kCameraJpeg, kCameraIntrinsics,
+  kObjectMesh,  // after the others: each effect's random stream is seeded by its value
   kCount
 };
 const char* EffectName(Effect effect);  // "object.scale", "camera.jpeg", ...
@@ -59,6 +61,10 @@ struct RealismParams {
   double tag_position = 0.0005;        // [m] in a random direction in the tag's plane
   double tag_orientation = 1.0 * M_PI / 180;  // [rad] about a random axis
   double colour_sigma = 0.04;          // relative gain per colour channel (material and texture)
+  double simplify_fraction = 0.4;      // the estimator's mesh: this share of the triangles,
+  double simplify_error = 0.001;       // [m] unless a collapse would move the surface further
+  double slab = 0.02;                  // [m] its own convex decomposition: slabs this thick
+  int max_slabs = 8;                   //     across each solid's longest axis, at most this many
   // The hand.
   double joint_origin_sigma = 0.0003;  // [m] per axis of every joint origin (link lengths)
   double joint_stiffness = 20.0;       // [N m/rad] q_motor = q_link + tau / k
@@ -93,6 +99,19 @@ ObjectModel ScaledObject(const ObjectModel& object, const Vec3& scale);
 void TintObject(ObjectModel& object, const Vec3& gains);
 // Every tag moved by `position` in its plane and turned by `orientation` about a random axis.
 void MisplaceTags(ObjectModel& object, double position, double orientation, std::mt19937& rng);
+// The estimator's object when it is not the world's (Effect::kObjectMesh): the model's visual
+// meshes simplified (SimplifyMesh) and a convex decomposition of its own (SlabHulls of the
+// simplified meshes), as files for the session's model folder that replace the model's own:
+// "simplified.obj", "simplified.mtl", "simplified_pieces.obj", and object.json (the model's,
+// read from `object_json`, with "visual" and "collision" pointing at them; textures are named
+// relative to `object_dir`, the folder the model was loaded from and copied with).
+struct SimplifiedModel {
+  std::vector<std::pair<std::string, std::string>> files;  // name in the folder, contents
+  std::size_t triangles_before = 0, triangles_after = 0;
+  std::size_t pieces_before = 0, pieces_after = 0;
+};
+SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& object_json, const std::string& object_dir,
+                              const RealismParams& params);
 // Joint origins moved by N(0, sigma) per axis; the offsets (per joint, in its parent link's
 // frame) go to `offsets` when given.
 HandModel PerturbedHand(const HandModel& hand, double sigma, std::mt19937& rng,

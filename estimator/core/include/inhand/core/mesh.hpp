@@ -75,6 +75,15 @@ bool IsWatertightForParity(const std::vector<const TriangleMesh*>& meshes,
 std::vector<TriangleMesh> ConnectedComponents(const TriangleMesh& mesh,
                                               double weld_tolerance = 1e-9);
 
+// Quadric-error simplification (Garland & Heckbert) by half-edge collapses onto existing
+// vertices, so that every kept vertex keeps its position, uv and normal. Vertices on open edges
+// (the mesh's border, uv seams, material borders: edges not shared by exactly two triangles by
+// index) stay, so seams do not open. A collapse that would flip or flatten a triangle or make
+// the surface non-manifold is skipped. Stops at `target_triangles` or before a collapse whose
+// quadric error (the sum of squared distances to the planes it had merged) exceeds
+// max_error². Unused vertices are dropped.
+TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles, double max_error);
+
 // A convex shape for contact queries, placed in its body (link or object) frame.
 // Primitives keep their exact parameters so GJK can use exact support functions; every piece
 // also carries its convex hull as vertices + outward triangles (for drawing, bounds, inertia).

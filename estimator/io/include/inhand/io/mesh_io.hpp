@@ -59,5 +59,23 @@ std::string CacheDirectory(const std::string& override_dir = "");
 
 // Writes pieces as one OBJ with an object per piece (readable back with "components").
 void WritePiecesObj(const std::vector<ConvexPiece>& pieces, const std::string& path);
+std::string PiecesObjText(const std::vector<ConvexPiece>& pieces);  // what WritePiecesObj writes
+
+// Meshes as OBJ text (positions, uvs, normals, one group and material per mesh) and its MTL
+// (diffuse colour and opacity as the meshes hold them, the texture as `texture_names[i]`,
+// relative to the OBJ; empty: none). The OBJ names its MTL `mtl_name`.
+struct ObjText {
+  std::string obj, mtl;
+};
+ObjText MeshesObjText(const std::vector<TriangleMesh>& meshes, const std::string& mtl_name,
+                      const std::vector<std::string>& texture_names);
+
+// A convex decomposition of closed meshes by slabs: the meshes' union split into solids
+// (welded by position), each cut into slabs about `slab` [m] thick (at most `max_slabs`) across
+// its longest axis; a piece is the convex hull of a slab's vertices and of the surface's
+// crossings with its two planes. Slabs too thin to enclose a volume are dropped. Throws
+// InputError naming `source` when no piece is left.
+std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, double slab, int max_slabs,
+                                   const std::string& source);
 
 }  // namespace inhand
