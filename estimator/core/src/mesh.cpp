@@ -373,10 +373,9 @@ TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
     const std::set<int> around = neighbours(c.v);
     ++stamp[v];
     for (int w : around) ++stamp[static_cast<std::size_t>(w)];
-    for (int w : around) {
-      push(w, c.v), push(c.v, w);
-      for (int x : neighbours(w)) push(w, x);  // w's quadric did not change, but its stamp did
-    }
+    // Every candidate that names a vertex whose stamp changed is stale: push its edges again.
+    for (int w : around)
+      for (int x : neighbours(w)) push(w, x), push(x, w);
   }
   TriangleMesh out;
   out.material = mesh.material;
