@@ -57,6 +57,12 @@ struct EdgeData {
   cv::Mat orientation;  // CV_8U, gradient direction bin (mod π)
 };
 
+// Gradient directions agree when their bins (mod π) are at most one apart, circularly.
+bool BinsAgree(int a, int b, int bins) {
+  const int d = std::abs(a - b);
+  return std::min(d, bins - d) <= 1;
+}
+
 EdgeData Edges(const Image8& im, const FeatureParams& p) {
   cv::Mat g = Grey(im);
   if (p.blur_sigma > 0) cv::GaussianBlur(g, g, cv::Size(0, 0), p.blur_sigma);
@@ -153,9 +159,7 @@ GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve, const std::vect
       const std::uint8_t* o = re.orientation.ptr<std::uint8_t>(y);
       std::uint8_t* f = free.ptr<std::uint8_t>(y);
       for (int x = 0; x < W; ++x) {
-        if (!e[x]) continue;
-        const int d = std::abs(int(o[x]) - b);
-        if (std::min(d, B - d) <= 1) f[x] = 0;
+        if (e[x] && BinsAgree(o[x], b, B)) f[x] = 0;
       }
     }
     cv::distanceTransform(free, dt[static_cast<std::size_t>(b)], cv::DIST_L2, cv::DIST_MASK_PRECISE);
@@ -277,8 +281,7 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     }
     for (const PieceEdge& e : pieces[i])
       for (int bin = 0; bin < p.orientation_bins; ++bin) {
-        const int d = std::abs(bin - e.bin);
-        if (std::min(d, p.orientation_bins - d) > 1) continue;  // orientation must agree (±1 bin)
+        if (!BinsAgree(bin, e.bin, p.orientation_bins)) continue;
         for (const PieceEdge& r : real_by_bin[static_cast<std::size_t>(bin)]) {
           const int sx = r.dx - e.dx, sy = r.dy - e.dy;
           if (sx < -S || sx > S || sy < -S || sy > S) continue;

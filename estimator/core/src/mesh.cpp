@@ -276,6 +276,16 @@ void RoundShape(double radius, double half_length, std::vector<Vec3>& v,
 
 }  // namespace
 
+TriangleMesh MergedGeometry(const std::vector<TriangleMesh>& meshes) {
+  TriangleMesh merged;
+  for (const TriangleMesh& m : meshes) {
+    const int base = static_cast<int>(merged.vertices.size());
+    merged.vertices.insert(merged.vertices.end(), m.vertices.begin(), m.vertices.end());
+    for (const auto& t : m.triangles) merged.triangles.emplace_back(t.array() + base);
+  }
+  return merged;
+}
+
 TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles, double max_error) {
   mesh.Validate("SimplifyMesh");
   const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();

@@ -312,15 +312,9 @@ ObjText MeshesObjText(const std::vector<TriangleMesh>& meshes, const std::string
 std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, double slab, int max_slabs,
                                    const std::string& source) {
   INHAND_CHECK(slab > 0.0 && max_slabs >= 1, "slab thickness and count must be positive");
-  TriangleMesh all;
-  for (const TriangleMesh& m : meshes) {
-    const int base = static_cast<int>(all.vertices.size());
-    all.vertices.insert(all.vertices.end(), m.vertices.begin(), m.vertices.end());
-    for (const Eigen::Vector3i& t : m.triangles) all.triangles.push_back(t + Eigen::Vector3i::Constant(base));
-  }
   std::vector<ConvexPiece> pieces;
   int index = 0;
-  for (const TriangleMesh& solid : ConnectedComponents(all, 1e-7)) {
+  for (const TriangleMesh& solid : ConnectedComponents(MergedGeometry(meshes), 1e-7)) {
     const Aabb box = solid.Bounds();
     int axis = 0;
     box.Size().maxCoeff(&axis);

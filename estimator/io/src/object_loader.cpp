@@ -26,13 +26,7 @@ void PiecesFromMesh(const std::vector<TriangleMesh>& meshes, const std::string& 
   } else if (method == "components") {
     for (ConvexPiece& p : ComponentHulls(meshes, where)) out.push_back(std::move(p));
   } else if (method == "hacd") {
-    TriangleMesh merged;
-    for (const TriangleMesh& m : meshes) {
-      const int base = static_cast<int>(merged.vertices.size());
-      merged.vertices.insert(merged.vertices.end(), m.vertices.begin(), m.vertices.end());
-      for (const auto& t : m.triangles) merged.triangles.emplace_back(t.array() + base);
-    }
-    for (ConvexPiece& p : DecomposeHacd(merged, hacd, where)) out.push_back(std::move(p));
+    for (ConvexPiece& p : DecomposeHacd(MergedGeometry(meshes), hacd, where)) out.push_back(std::move(p));
   } else {
     throw InputError(where + ": collision method '" + method +
                      "' is unknown, expected \"hull\", \"components\" or \"hacd\"");

@@ -75,6 +75,10 @@ bool IsWatertightForParity(const std::vector<const TriangleMesh*>& meshes,
 std::vector<TriangleMesh> ConnectedComponents(const TriangleMesh& mesh,
                                               double weld_tolerance = 1e-9);
 
+// The positions and triangles of several meshes as one mesh (no normals, uvs or material), for
+// geometry computed over all of them.
+TriangleMesh MergedGeometry(const std::vector<TriangleMesh>& meshes);
+
 // Quadric-error simplification (Garland & Heckbert) by half-edge collapses onto existing
 // vertices, so that every kept vertex keeps its position, uv and normal. Vertices on open edges
 // (the mesh's border, uv seams, material borders: edges not shared by exactly two triangles by
