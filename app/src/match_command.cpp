@@ -65,7 +65,7 @@ int RunMatch(const MatchCommand& cmd) {
                              {"virtual_corners", d.virtual_corners.size()}, {"camera_corners", d.real_corners.size()},
                              {"pieces_rejected", d.piece_rejected.size()}, {"votes_rejected", d.vote_rejected.size()},
                              {"matches", r.matches.size()}, {"inliers", r.num_inliers()}, {"features_used", fs.used_match.size()},
-                             {"list", list}};
+                             {"search_radius_px", fs.search_radius}, {"relocalized_m", fs.relocalized}, {"list", list}};
     std::ofstream(out / "matches.json") << doc.dump(2) << "\n";
     out.Commit();
   }
@@ -74,7 +74,10 @@ int RunMatch(const MatchCommand& cmd) {
   const double count = std::max<double>(1.0, static_cast<double>(fs.residual_before.size()));
   std::cout << "frame " << cmd.frame << ": " << d.virtual_corners.size() << " virtual corners, " << r.matches.size() << " Hough matches, "
             << r.num_inliers() << " RANSAC inliers, " << fs.used_match.size() << " used; mean residual " << before / count << " px before, "
-            << after / count << " px after the update; pictures in " << cmd.out << "\n";
+            << after / count << " px after the update";
+  if (fs.relocalized > 0.0)
+    std::cout << "; the estimate had lost the object, found again " << fs.relocalized * 1000 << " mm away (its position sigma widened by that)";
+  std::cout << "; pictures in " << cmd.out << "\n";
   return 0;
 }
 

@@ -276,6 +276,7 @@ int RunReplay(const ReplayCommand& cmd) {
               {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
     const TrackerStats ts = player.tracker(i).stats();
     s["images_fused"] = ts.images_fused;
+    s["relocalizations"] = ts.relocalizations;
     s["images_dropped"] = ts.images_dropped_late + ts.images_dropped_busy + ts.images_rejected;
     s["joint_samples_dropped"] = ts.samples_dropped + ts.samples_rejected;
     if (st.with_truth > 0) {

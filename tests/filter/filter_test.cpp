@@ -652,6 +652,22 @@ TEST(Filter, TheCameraErrorIsEstimatedAndKeptAcrossFrames) {
   for (const auto& v : f.trace().visual) EXPECT_LT((v.measured - v.predicted).norm(), 0.2);
 }
 
+// WidenPose adds σ² to each axis of the pose's variance and nothing elsewhere; a negative or
+// non-finite σ is refused.
+TEST(Filter, WidenPoseAddsToThePoseVarianceOnly) {
+  FingerScene s;
+  Filter f = s.Started(At(Vec3(0.0, 0.06, 0.04)), FilterParams(), false);
+  const Eigen::MatrixXd before = f.covariance();
+  f.WidenPose(0.03, 0.1);
+  Eigen::MatrixXd added = f.covariance() - before;
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(added(i, i), 0.03 * 0.03, 1e-15);
+  for (int i = 3; i < 6; ++i) EXPECT_NEAR(added(i, i), 0.1 * 0.1, 1e-15);
+  added.diagonal().head<6>().setZero();
+  EXPECT_EQ(added.cwiseAbs().maxCoeff(), 0.0);
+  for (const auto& [sp, so] : std::vector<std::pair<double, double>>{{-0.01, 0.0}, {0.0, std::nan("")}, {INFINITY, 0.0}})
+    EXPECT_THROW(f.WidenPose(sp, so), InputError);
+}
+
 TEST(FilterParams, ValidationAndJsonRoundTrip) {
   FilterParams p;
   p.contact_iterations = 3;

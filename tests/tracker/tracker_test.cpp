@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <map>
 #include <cmath>
 #include <thread>
 
@@ -144,6 +145,35 @@ TEST(Tracker, ThreadedEqualsDeterministic) {
       EXPECT_EQ(tracker->last_visual().sequence, reference->last_visual().sequence);
     }
   }
+}
+
+// An estimate that has lost its object and claims to know where it is: started 30 mm beside it
+// (across the camera's view) with σ 2 mm. The features of the first frames are all gated, the
+// search around the estimate then matches poorly, and after kLostFrames such frames the object
+// is searched for as at the start: found again that far away, the σ of the position is widened
+// by the distance and the features move the estimate back onto the object. Without images (jt)
+// it stays off (and without the widening, so did jtf: 42 mm at the end).
+TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
+  const Recording& r = Recording::Get();
+  const int n = std::min(r.session.num_samples(), 1500);  // 3 s, 15 frames
+  const SessionInfo& info = r.session.info();
+  const Vec3 offset = 0.03 * r.session.camera_frames()[0].T_PC.linear().col(0);
+  Transform start = info.initial_T_PO;
+  start.translation() += offset;
+  const StartSigmas sigmas{0.002, 1.0 * M_PI / 180, info.sigma_joint_bias, {}};
+  std::map<std::string, double> error;
+  double relocalized = 0.0;
+  for (const std::string set : {"jt", "jtf"}) {
+    Tracker tracker(r.models.hand, r.models.object, Set(set), TrackerParams());
+    tracker.Start(r.session.t(0), start, sigmas);
+    Feed(r, tracker, n, 0.0, [&](int) { relocalized = std::max(relocalized, tracker.last_visual().relocalized); });
+    EXPECT_EQ(tracker.stats().relocalizations, set == "jtf" ? 1 : 0) << set;  // once found, it is not lost again
+    error[set] = (tracker.T_PO().translation() - r.session.GroundTruthAt(r.session.t(n - 1)).translation()).norm();
+  }
+  EXPECT_GT(error["jt"], 0.02);
+  EXPECT_LT(error["jtf"], 0.008);
+  EXPECT_GT(relocalized, 0.015);  // about the 30 mm it was off, at the object's depth
+  EXPECT_LT(relocalized, 0.045);
 }
 
 // Frames older than the horizon, or captured before the first joint sample, are dropped and

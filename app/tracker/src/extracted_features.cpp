@@ -64,23 +64,61 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
                                // the local radius, realistic shampoo's visual step took 62 ms,
                                // not 15, and was no more accurate overall
   step.search_radius = radius;
+  step.relocalized = 0.0;
   step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false);  // no debug-only camera corners
-  // Inliers to object points through the virtual depth, moved into O with the estimate.
+  Inliers(step.match, T_PC, K, f, step.virtual_view, step.used_match, out);
+  bool well = static_cast<int>(out.size()) >= kWellMatched;
+
+  // Lost: this frame and the kLostFrames before it matched poorly after a good one (the
+  // estimate may have left the object: pushed away by a finger closing through it, say, with a
+  // σ that keeps the search local). The object is searched for once more as at the start (then
+  // again every kLostFrames poor frames: each costs a whole-object search). Found
+  // by a shift of the whole object that fits its edges at least twice as well as none, and
+  // matched well around it, the estimate is that far off whatever its σ claims: the shift at the
+  // object's depth is added to the position's σ (Filter::WidenPose) so that the features can
+  // move it back. Otherwise the frame's own search stands (a heavily occluded object matches
+  // poorly for seconds without being lost).
+  if (matched_well_ && !well && poor_frames_ >= kLostFrames && poor_frames_ % kLostFrames == 0) {
+    FeatureParams global = params_;
+    global.global_search_radius = params_.max_search_radius;
+    MatchResult again = MatchFeatures(image, step.virtual_view.colour, &object_mask_, global, &hand_mask_, false);
+    const MatchDebug& d = again.debug;
+    const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);
+    if (d.global_cost < 0.5 * d.global_cost_unshifted && X_C.z() > 1e-3) {
+      std::vector<int> used;
+      std::vector<VisualFeature> found;
+      Inliers(again, T_PC, K, f, step.virtual_view, used, found);
+      if (static_cast<int>(found.size()) >= kWellMatched) {
+        step.match = std::move(again);
+        step.used_match = std::move(used);
+        out = std::move(found);
+        step.search_radius = params_.max_search_radius;
+        step.relocalized = d.global_shift.norm() * X_C.z() / K.fx;
+        well = true;
+      }
+    }
+  }
+  matched_well_ = matched_well_ || well;
+  poor_frames_ = well ? 0 : poor_frames_ + 1;
+}
+
+// Inliers to object points through the virtual depth, moved into O with the estimate.
+void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
+                                const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const {
   const Transform T_OP = f.T_PO().inverse();
   out.clear();
-  step.used_match.clear();
-  for (std::size_t m = 0; m < step.match.matches.size(); ++m) {
-    const FeatureMatch& match = step.match.matches[m];
-    if (!match.inlier) continue;
-    const int x = static_cast<int>(std::lround(match.virtual_px.x())), y = static_cast<int>(std::lround(match.virtual_px.y()));
+  used.clear();
+  for (std::size_t m = 0; m < match.matches.size(); ++m) {
+    const FeatureMatch& fm = match.matches[m];
+    if (!fm.inlier) continue;
+    const int x = static_cast<int>(std::lround(fm.virtual_px.x())), y = static_cast<int>(std::lround(fm.virtual_px.y()));
     if (x < 0 || y < 0 || x >= K.width || y >= K.height || !object_mask_[std::size_t(y) * K.width + x]) continue;
-    const float z = step.virtual_view.depth_at(x, y);
+    const float z = view.depth_at(x, y);
     if (!std::isfinite(z)) continue;
-    const Vec3 X_P = T_PC * K.Unproject(match.virtual_px, z);
-    out.push_back({match.id, T_OP * X_P, K.Undistort(match.real_px)});
-    step.used_match.push_back(static_cast<int>(m));
+    const Vec3 X_P = T_PC * K.Unproject(fm.virtual_px, z);
+    out.push_back({fm.id, T_OP * X_P, K.Undistort(fm.real_px)});
+    used.push_back(static_cast<int>(m));
   }
-  matched_well_ = matched_well_ || static_cast<int>(out.size()) >= kWellMatched;
 }
 
 }  // namespace inhand::tracker_detail

@@ -17,7 +17,7 @@ class ExtractedFeatures {
  public:
   ExtractedFeatures(const HandModel& hand, const ObjectModel& object, const FeatureParams& params);
   ~ExtractedFeatures();
-  // Fills step.virtual_view, step.match and step.used_match, and `out`.
+  // Fills step.virtual_view, step.match, step.used_match and step.relocalized, and `out`.
   void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
                VisualStep& step, std::vector<VisualFeature>& out);
 
@@ -31,8 +31,15 @@ class ExtractedFeatures {
   HandMeshes hand_meshes_;
   std::vector<int> object_meshes_;
   std::vector<std::uint8_t> object_mask_, hand_mask_;
+  // The inliers of `match` that lie on the object in `view`, as features (object point through
+  // the virtual depth, measured pixel undistorted), with their indices into match.matches.
+  void Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
+               const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const;
   static constexpr int kWellMatched = 8;  // inliers on the object that end the wide first search
+  static constexpr int kLostFrames = 3;   // frames in a row below it after which the object is
+                                          // searched for once more as at the start
   bool matched_well_ = false;
+  int poor_frames_ = 0;  // frames in a row below kWellMatched since the last well matched one
 };
 
 }  // namespace inhand::tracker_detail

@@ -258,7 +258,10 @@ struct Tracker::Impl {
     }
   }
 
-  static void Apply(Filter& f, const VisualUpdate& u) { f.UpdateVisual(u.features, u.T_PC, u.K); }
+  static void Apply(Filter& f, const VisualUpdate& u) {
+    if (u.widen_position > 0.0) f.WidenPose(u.widen_position, 0.0);
+    f.UpdateVisual(u.features, u.T_PC, u.K);
+  }
 
   void Replay(Filter& f, Slot& s) {
     f.Predict(s.q, s.dt);
@@ -302,12 +305,13 @@ struct Tracker::Impl {
     step.offered = step.used = 0;
     double m2 = 0.0;
     std::vector<VisualUpdate> fresh;
-    const auto fuse = [&](std::vector<VisualFeature>& measured) {
+    const auto fuse = [&](std::vector<VisualFeature>& measured, double widen_position) {
+      if (widen_position > 0.0) f.WidenPose(widen_position, 0.0);
       step.used += f.UpdateVisual(measured, T_PC, K);
       step.offered += static_cast<int>(measured.size());
       const auto& visual = f.trace().visual;
       for (std::size_t i = visual.size() - measured.size(); i < visual.size(); ++i) m2 += visual[i].mahalanobis;
-      fresh.push_back({t_c, measured, T_PC, K});
+      fresh.push_back({t_c, widen_position, measured, T_PC, K});
     };
     if (proc.features) {
       proc.features->Measure(image, T_PC, K, f, step, proc.measured);
@@ -318,12 +322,12 @@ struct Tracker::Impl {
         for (const VisualFeature& v : proc.measured) out.push_back((K.Project(T_CP * (T_PO * v.x_O)) - v.pixel).norm());
       };
       residuals(step.residual_before);
-      fuse(proc.measured);
+      fuse(proc.measured, step.relocalized);
       residuals(step.residual_after);
     }
     if (proc.tags) {
       proc.tags->Measure(image, T_PC, K, f.T_PO(), step.tags, proc.measured);
-      fuse(proc.measured);
+      fuse(proc.measured, 0.0);
     }
     step.mean_mahalanobis = step.offered > 0 ? m2 / step.offered : 0.0;
     step.t_capture = t_c;
@@ -350,6 +354,7 @@ struct Tracker::Impl {
         s.fused = mine.fused;
       }
       ++stats.images_fused;
+      if (step.relocalized > 0.0) ++stats.relocalizations;
       if (upto > a) ++stats.rewinds, stats.samples_replayed += upto - a;
       step.sequence = ++sequence;
       if (options.threaded) {

@@ -117,6 +117,14 @@ void Filter::Restore(const FilterState& state) {
   kin_.Update(hand_, s_.q_eff);
 }
 
+void Filter::WidenPose(double sigma_position, double sigma_orientation) {
+  if (!(sigma_position >= 0.0 && sigma_orientation >= 0.0) || !std::isfinite(sigma_position) || !std::isfinite(sigma_orientation))
+    throw InputError("filter: widening the pose by sigma " + std::to_string(sigma_position) + " m, " +
+                     std::to_string(sigma_orientation) + " rad; expected finite and >= 0");
+  s_.P.diagonal().head<3>().array() += sigma_position * sigma_position;
+  s_.P.diagonal().segment<3>(3).array() += sigma_orientation * sigma_orientation;
+}
+
 Transform Filter::T_PO() const { return MakeTransform(s_.p, s_.R); }
 
 void Filter::RefreshKinematics() {

@@ -64,6 +64,7 @@ struct TrackerStats {
   long images_rejected = 0;        // empty, or with a time or camera pose that is not finite
   long rewinds = 0;                // images fused before joint samples already fused
   long samples_replayed = 0;       // joint samples re-applied after them
+  long relocalizations = 0;        // images that found a lost object again (VisualStep::relocalized)
 };
 
 // What the last fused image showed and did, for overlays, the GUI and `inhand match`.
@@ -83,6 +84,8 @@ struct VisualStep {
   int search_radius = 0;           // [px] how far the object was searched (widened while
                                    // uncertain; beyond FeatureParams::search_radius, match.debug
                                    // has the global shift)
+  double relocalized = 0.0;        // [m] the object, lost for frames, was found this far from
+                                   // the estimate: the σ added to its position before the update
   std::vector<int> used_match;     // index into match.matches
   std::vector<double> residual_before, residual_after;  // [px]
 };
@@ -91,6 +94,7 @@ struct VisualStep {
 // extracted features), kept so that an older image fused later can re-apply it after itself.
 struct VisualUpdate {
   double t_capture = 0.0;
+  double widen_position = 0.0;  // [m] σ added to the position before the update (relocalized)
   std::vector<VisualFeature> features;
   Transform T_PC = Transform::Identity();
   Intrinsics K;

@@ -129,6 +129,12 @@ class Filter {
   int UpdateVisual(const std::vector<VisualFeature>& features, const Transform& T_PC,
                    const Intrinsics& K);
 
+  // Adds σ² to the variance of every axis of the position and of the orientation: what the
+  // caller learnt the estimate can be off by, beyond what the filter's models admit (the
+  // tracker: the object found again far from where the estimate had lost it). Throws
+  // InputError unless both are finite and >= 0.
+  void WidenPose(double sigma_position, double sigma_orientation);
+
   Transform T_PO() const;
   const Vec3& position() const { return s_.p; }
   const Mat3& rotation() const { return s_.R; }
