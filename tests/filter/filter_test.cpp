@@ -428,6 +428,55 @@ TEST(Filter, PredictionMovesAGraspedObjectWithTheFingers) {
   EXPECT_GT(expected.norm(), 1e-4);
 }
 
+// travel_orientation: while the finger moves the ball through its contact, the orientation's
+// variance grows by travel_orientation · D · Γ⁻¹ per 50 ms window (D: the contact point's
+// displacement over the window). The growth is the same at 100 Hz and at 1 kHz with the joints'
+// noise (which cancels within a window); nothing grows without a gyration tensor or at 0.
+TEST(Filter, TheOrientationsVarianceGrowsWithTheContactsTravelNotWithTheJointRate) {
+  FingerScene s;
+  const double gyration = 0.4 * 0.02 * 0.02;  // solid ball, radius 20 mm
+  FilterParams params;
+  params.process_orientation = 0.0;  // only the travel grows it here
+  params.motion_orientation = 0.0;
+  const auto run = [&](const FilterParams& p, const Mat3& G, int rate, double noise, double* path) {
+    Filter f(s.hand, s.query, p, FilterOptions{false, G});
+    f.Reset(At(Vec3(0, 0.07, 0.0295)), s.q0, StartSigmas{0.02, 0.087, 1e-9, {}});  // 0.5 mm into the ball
+    f.Predict(s.q0, 1.0 / rate);
+    f.UpdateContacts(Eigen::Vector2d::Zero());
+    const int link = f.state().active.at(0).link;
+    const Vec3 c_L = f.state().active.at(0).c_f_L;
+    const Mat3 before = f.covariance().block(3, 3, 3, 3);
+    KinematicsData kin(s.hand);
+    const auto point = [&](const Eigen::Vector2d& q) {
+      kin.Update(s.hand, q);
+      return Vec3(kin.T_PL(link) * c_L);
+    };
+    const int steps = rate / 2;  // 0.5 s, flexing the distal joint by 0.3 rad
+    Vec3 last = point(s.q0);
+    *path = 0.0;
+    for (int k = 1; k <= steps; ++k) {
+      const Eigen::Vector2d q(0.0, 0.3 * k / steps);
+      f.Predict(q + Eigen::Vector2d::Constant(k % 2 ? noise : -noise), 1.0 / rate);
+      if (k % (rate / 20) == 0) *path += (point(q) - last).norm(), last = point(q);  // at each window's end
+    }
+    const Mat3 growth = f.covariance().block(3, 3, 3, 3) - before;  // isotropic, as Γ is
+    EXPECT_LT((growth - growth(0, 0) * Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-12);
+    return growth(0, 0);
+  };
+  const Mat3 G = Mat3::Identity() * gyration;
+  double path = 0.0, path_fast = 0.0;
+  const double slow = run(params, G, 100, 0.0, &path);
+  const double fast = run(params, G, 1000, 2e-4, &path_fast);
+  EXPECT_GT(path, 0.004);  // the contact point travels about 8 mm
+  // The filter takes D to first order at the window's last configuration (0.03 rad a window).
+  EXPECT_NEAR(slow, params.travel_orientation * path / gyration, 0.04 * slow);
+  EXPECT_NEAR(fast, slow, 0.05 * slow);
+  FilterParams off = params;
+  off.travel_orientation = 0.0;
+  EXPECT_EQ(run(off, G, 100, 0.0, &path), 0.0);
+  EXPECT_EQ(run(params, Mat3::Zero(), 100, 0.0, &path), 0.0);
+}
+
 // --- Jacobians against finite differences -------------------------------------------------
 
 TEST(FilterJacobians, GraspMapBlockIsTheObjectPointVelocity) {
@@ -666,6 +715,22 @@ TEST(Filter, WidenPoseAddsToThePoseVarianceOnly) {
   EXPECT_EQ(added.cwiseAbs().maxCoeff(), 0.0);
   for (const auto& [sp, so] : std::vector<std::pair<double, double>>{{-0.01, 0.0}, {0.0, std::nan("")}, {INFINITY, 0.0}})
     EXPECT_THROW(f.WidenPose(sp, so), InputError);
+}
+
+// A gyration tensor, when given, must be symmetric positive definite; none (zero) is allowed.
+TEST(FilterOptions, AGyrationTensorMustBeSymmetricPositiveDefinite) {
+  FingerScene s;
+  EXPECT_NO_THROW(Filter(s.hand, s.query, FilterParams(), FilterOptions{false, Mat3::Zero()}));
+  EXPECT_NO_THROW(Filter(s.hand, s.query, FilterParams(), FilterOptions{false, Vec3(1e-5, 4e-4, 4e-4).asDiagonal()}));
+  for (const Mat3& bad : {Mat3(Vec3(1e-4, 1e-4, 0.0).asDiagonal()), Mat3(Vec3(1e-4, -1e-4, 1e-4).asDiagonal()),
+                          Mat3((Mat3() << 1e-4, 5e-5, 0, 0, 1e-4, 0, 0, 0, 1e-4).finished()), Mat3(Mat3::Constant(std::nan("")))}) {
+    try {
+      Filter f(s.hand, s.query, FilterParams(), FilterOptions{false, bad});
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("gyration tensor"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(FilterParams, ValidationAndJsonRoundTrip) {

@@ -92,6 +92,8 @@ TEST(Objects, BadDescriptionsNameFileAndField) {
          "\"tags\": [{\"id\": 1, \"size\": 0.02}]}", "tags[0].pose");
   expect("{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
          "\"tags\": [{\"id\": 1, \"size\": 0.02, \"pose\": {\"quat_wxyz\": [2, 0, 0, 0]}}]}", "unit quaternion");
+  expect("{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+         "\"inertia\": {\"ixx\": 1, \"iyy\": 1, \"izz\": 1, \"ixy\": 2}}", "field 'inertia' is not positive definite");
   EXPECT_THROW(LoadObjectModel(dir / "cube.obj"), InputError);  // not a description
 }
 

@@ -69,16 +69,17 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   Inliers(step.match, T_PC, K, f, step.virtual_view, step.used_match, out);
   bool well = static_cast<int>(out.size()) >= kWellMatched;
 
-  // Lost: this frame and the kLostFrames before it matched poorly after a good one (the
-  // estimate may have left the object: pushed away by a finger closing through it, say, with a
-  // σ that keeps the search local). The object is searched for once more as at the start (then
-  // again every kLostFrames poor frames: each costs a whole-object search). Found
-  // by a shift of the whole object that fits its edges at least twice as well as none, and
-  // matched well around it, the estimate is that far off whatever its σ claims: the shift at the
-  // object's depth is added to the position's σ (Filter::WidenPose) so that the features can
-  // move it back. Otherwise the frame's own search stands (a heavily occluded object matches
-  // poorly for seconds without being lost).
-  if (matched_well_ && !well && poor_frames_ >= kLostFrames && poor_frames_ % kLostFrames == 0) {
+  // Lost: the kLostFrames frames before this one fused fewer than kWellMatched features after a
+  // frame had matched well (matched poorly, or matched and gated: the estimate may have left the
+  // object, pushed away by a finger closing through it, say, with a σ that keeps the search
+  // local or gates what it finds). The object is searched for once more as at the start (then
+  // again every kLostFrames poor frames: each costs a whole-object search). Found by a shift of
+  // the whole object that fits its edges at least twice as well as none, and matched well around
+  // it, the estimate is that far off whatever its σ claims: the shift at the object's depth is
+  // added to the position's σ (Filter::WidenPose) so that the features can move it back.
+  // Otherwise the frame's own search stands (a heavily occluded object matches poorly for
+  // seconds without being lost).
+  if (matched_well_ && poor_frames_ >= kLostFrames && poor_frames_ % kLostFrames == 0) {
     FeatureParams global = params_;
     global.global_search_radius = params_.max_search_radius;
     MatchResult again = MatchFeatures(image, step.virtual_view.colour, &object_mask_, global, &hand_mask_, false);
@@ -99,8 +100,9 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     }
   }
   matched_well_ = matched_well_ || well;
-  poor_frames_ = well ? 0 : poor_frames_ + 1;
 }
+
+void ExtractedFeatures::Fused(int used) { poor_frames_ = used >= kWellMatched ? 0 : poor_frames_ + 1; }
 
 // Inliers to object points through the virtual depth, moved into O with the estimate.
 void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,

@@ -18,8 +18,10 @@ class ExtractedFeatures {
   ExtractedFeatures(const HandModel& hand, const ObjectModel& object, const FeatureParams& params);
   ~ExtractedFeatures();
   // Fills step.virtual_view, step.match, step.used_match and step.relocalized, and `out`.
+  // Fused() must follow with the number of them the filter fused (not gated).
   void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
                VisualStep& step, std::vector<VisualFeature>& out);
+  void Fused(int used);
 
  private:
   const HandModel& hand_;
@@ -36,10 +38,10 @@ class ExtractedFeatures {
   void Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
                const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const;
   static constexpr int kWellMatched = 8;  // inliers on the object that end the wide first search
-  static constexpr int kLostFrames = 3;   // frames in a row below it after which the object is
-                                          // searched for once more as at the start
+  static constexpr int kLostFrames = 3;   // frames in a row that fused fewer, after which the
+                                          // object is searched for once more as at the start
   bool matched_well_ = false;
-  int poor_frames_ = 0;  // frames in a row below kWellMatched since the last well matched one
+  int poor_frames_ = 0;  // frames in a row that fused fewer than kWellMatched features
 };
 
 }  // namespace inhand::tracker_detail

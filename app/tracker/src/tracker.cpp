@@ -43,6 +43,13 @@ struct Job {
   Intrinsics K;
 };
 
+FilterOptions FilterOptionsFor(const ObjectModel& object, const Modalities& m) {
+  FilterOptions options;
+  options.use_torque = m.torque;
+  options.gyration_O = object.inertia_com / object.mass;  // for FilterParams::travel_orientation
+  return options;
+}
+
 }  // namespace
 
 struct Tracker::Impl {
@@ -60,14 +67,14 @@ struct Tracker::Impl {
   };
 
   Impl(const HandModel& h, const ObjectModel& o, const Modalities& m, const TrackerParams& p, const TrackerOptions& opt)
-      : hand(h), object(o), modalities(m), params(p), options(opt), query(h, o), filter(h, query, p.filter, FilterOptions{m.torque}) {
+      : hand(h), object(o), modalities(m), params(p), options(opt), query(h, o), filter(h, query, p.filter, FilterOptionsFor(o, m)) {
     params.Validate();
     if (!(options.horizon >= 0.0) || options.history_samples < 1 || options.max_queued_images < 1)
       throw InputError("tracker options: horizon must be >= 0 s, history_samples and max_queued_images >= 1");
     ring.resize(static_cast<std::size_t>(options.history_samples));
     if (options.threaded) {
       proc.query = std::make_unique<BulletContactQuery>(h, o);
-      proc.own_filter = std::make_unique<Filter>(h, *proc.query, p.filter, FilterOptions{m.torque});
+      proc.own_filter = std::make_unique<Filter>(h, *proc.query, p.filter, FilterOptionsFor(o, m));
       proc.filter = proc.own_filter.get();
     } else {
       proc.filter = &filter;
@@ -323,6 +330,7 @@ struct Tracker::Impl {
       };
       residuals(step.residual_before);
       fuse(proc.measured, step.relocalized);
+      proc.features->Fused(step.used);
       residuals(step.residual_after);
     }
     if (proc.tags) {

@@ -2,6 +2,7 @@
 // measurement sources that feed the update live in their own files (filter.hpp lists them).
 #include "inhand/filter/filter.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -40,6 +41,13 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
       n_(6 + hand.num_q()),
       kin_(hand) {
   params_.Validate();
+  const Mat3& G = options_.gyration_O;
+  if (!G.isZero(0.0)) {
+    if (!G.allFinite() || !G.isApprox(G.transpose(), 1e-9) || Eigen::SelfAdjointEigenSolver<Mat3>(G).eigenvalues().minCoeff() <= 0.0)
+      throw InputError("filter options: the object's gyration tensor must be symmetric positive definite");
+    gyration_inv_O_ = G.inverse();
+    travel_ = params_.travel_orientation > 0.0;
+  }
   camera_state_ = params_.camera_position_sigma > 0.0 || params_.camera_orientation_sigma > 0.0;
   na_ = camera_state_ ? n_ + 6 : n_;
   s_.b = Eigen::VectorXd::Zero(m_);
@@ -47,6 +55,7 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
   Pn_ = s_.P;
   delta_saved_ = Eigen::VectorXd::Zero(na_);
   s_.q_prev = Eigen::VectorXd::Zero(m_);
+  s_.q_window = Eigen::VectorXd::Zero(m_);
   s_.q_eff = Eigen::VectorXd::Zero(m_);
   delta_ = Eigen::VectorXd::Zero(na_);
   J_.setZero(3, m_);
@@ -106,6 +115,8 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
   s_.active.clear();
   s_.trace.Clear();
   s_.grip = s_.max_grip = 0.0;
+  s_.q_window = q_meas;
+  s_.window_time = 0.0;
   RefreshKinematics();
 }
 
@@ -177,7 +188,25 @@ void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt)
   s_.P.diagonal().head<3>().array() += sp;
   s_.P.diagonal().segment<3>(3).array() += so;
   s_.P.diagonal().segment(6, m_).array() += params_.process_bias * params_.process_bias * dtp;
+  if (travel_) GrowWithTravel(q_meas, dtp);
   s_.q_prev = q_meas;
+}
+
+void Filter::GrowWithTravel(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt) {
+  constexpr double kWindow = 0.05;  // [s]
+  if (s_.q_window.size() != m_) s_.q_window = s_.q_prev, s_.window_time = 0.0;
+  s_.window_time += dt;
+  if (s_.window_time < kWindow) return;
+  dq_ = q_meas - s_.q_window;  // over the window: the joints' noise telescopes
+  double travel = 0.0;
+  for (const ActiveContact& a : s_.active) {
+    PointJacobian(hand_, kin_, a.link, kin_.T_PL(a.link) * a.c_f_L, J_);
+    travel = std::max(travel, (J_ * dq_).norm());
+  }
+  if (travel > 0.0 && std::isfinite(travel))
+    s_.P.block<3, 3>(3, 3) += (params_.travel_orientation * travel) * (s_.R * gyration_inv_O_ * s_.R.transpose());
+  s_.q_window = q_meas;
+  s_.window_time = 0.0;
 }
 
 template <int D>

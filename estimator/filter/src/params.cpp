@@ -43,6 +43,7 @@ const std::vector<Field>& Fields() {
       {"process_bias", &FilterParams::process_bias, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10] rad/sqrt(s)"},
       {"motion_position", &FilterParams::motion_position, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10]"},
       {"motion_orientation", &FilterParams::motion_orientation, nullptr, nullptr, 0.0, 10.0, false, "in [0, 10]"},
+      {"travel_orientation", &FilterParams::travel_orientation, nullptr, nullptr, 0.0, 1.0, false, "in [0, 1] m (0 disables)"},
       {"slip_torque", &FilterParams::slip_torque, nullptr, nullptr, 0.0, 1e4, false, "in [0, 1e4] N m (0 disables)"},
       {"slip_scale", &FilterParams::slip_scale, nullptr, nullptr, 1.0, 1e4, false, "in [1, 1e4]"},
       {"pixel_sigma", &FilterParams::pixel_sigma, nullptr, nullptr, 0.01, 1000.0, false, "in [0.01, 1000] px"},

@@ -1,5 +1,6 @@
 #include "inhand/io/object_loader.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <filesystem>
 
@@ -144,6 +145,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
     const double iyz = I.Has("iyz") ? I["iyz"].Number() : 0.0;
     M << I["ixx"].PositiveNumber(), ixy, ixz, ixy, I["iyy"].PositiveNumber(), iyz, ixz, iyz,
         I["izz"].PositiveNumber();
+    if (!M.allFinite() || Eigen::SelfAdjointEigenSolver<Mat3>(M).eigenvalues().minCoeff() <= 0.0)
+      throw InputError(path + ": field 'inertia' is not positive definite (no rigid body has it: check ixy, ixz, iyz)");
     obj.inertia_com = M;
   }
 

@@ -83,6 +83,9 @@ struct StartSigmas {
 
 struct FilterOptions {
   bool use_torque = false;  // torque contacts (modality t)
+  // The object's gyration tensor (inertia about its centre of mass / mass, object axes [m²]):
+  // the metric of FilterParams::travel_orientation. Zero (not known): that noise is off.
+  Mat3 gyration_O = Mat3::Zero();
 };
 
 // A contact that moves the object with its finger in Predict: its point fixed on the link.
@@ -106,6 +109,8 @@ struct FilterState {
   bool have_prev = false;
   double grip = 0.0;              // [N m] Σ|τ| of the last contact update
   double max_grip = 0.0;          // [N m] its largest value since Reset
+  Eigen::VectorXd q_window;       // the joints where the current travel window began
+  double window_time = 0.0;       // [s] since then
   std::vector<ActiveContact> active;
   FilterTrace trace;              // what the last step decided
 };
@@ -166,6 +171,9 @@ class Filter {
   // Applies the accumulated correction (retraction on SO(3)) and clears it.
   void Commit();
   void RefreshKinematics();
+  // travel_orientation: at the end of each 50 ms window, the orientation's variance grows with
+  // the largest displacement of an active contact point over it.
+  void GrowWithTravel(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt);
 
   // Measurement sources, one file each (src/): kinematic_contacts.cpp, torque_contacts.cpp,
   // contact_constraint.cpp (the constraint both kinds of contact apply), visual_features.cpp.
@@ -185,6 +193,8 @@ class Filter {
   FilterParams params_;
   FilterOptions options_;
   bool camera_state_ = false;  // ξ is part of the state (camera σ > 0)
+  bool travel_ = false;        // travel_orientation > 0 with a gyration tensor
+  Mat3 gyration_inv_O_ = Mat3::Zero();
   int m_, n_, na_;             // joints; pose + biases; + camera error
 
   FilterState s_;

@@ -76,6 +76,25 @@ struct FilterParams {
   double process_bias = 0.0;                  // [rad/√s] random walk of the joint biases
   double motion_position = 0.2;               // σ added per metre of predicted translation [1]
   double motion_orientation = 0.2;            // σ added per radian of predicted rotation [1]
+  double travel_orientation = 2e-4;           // [m] the orientation's variance grows with the
+                                              // fingers' travel at the contacts: by this · D ·
+                                              // Γ⁻¹ per 50 ms window, D the largest displacement of
+                                              // a contact point over the window (jitter cancels
+                                              // within it, so the growth does not depend on the
+                                              // joint rate), Γ the object's gyration tensor
+                                              // (FilterOptions; without it, off). A pen (Γ about
+                                              // its axis 15 mm²) is rolled by fingertips the
+                                              // damped prediction does not follow; a bottle (600
+                                              // mm²) is barely turned by fingers closing round it.
+                                              // Chosen on paper noise, seeds 1-5, 1e-4 / 2e-4 /
+                                              // 5e-4 against 0: pen j NEES 70 -> 9 / 7 / 5; brush
+                                              // jtf 7.7 mm / 4.3 deg (NEES 16) -> 7.7 / 11.3 (10),
+                                              // 5.5 / 0.8 (7), 5.0 / 1.2 (7); but pen jtf
+                                              // orientation 52.6 -> 49 / 62 / 92 deg and ketchup jt
+                                              // position 15.5 -> 19.7 / 21.4 / 20.6 mm. Over both
+                                              // profiles and seeds 101-105 too, NEES within [2, 15]
+                                              // on 66 of 76 sets, 56 before it and the
+                                              // tracker's lost-object search (README); 0 disables
   double slip_torque = 2.0;                   // [N m] with torques: once the hand has gripped
                                               // this hard (Σ|τ| over the joints), a grip below it
                                               // may let the object slip, which the no-slip
