@@ -203,8 +203,10 @@ void Filter::GrowWithTravel(const Eigen::Ref<const Eigen::VectorXd>& q_meas, dou
     PointJacobian(hand_, kin_, a.link, kin_.T_PL(a.link) * a.c_f_L, J_);
     travel = std::max(travel, (J_ * dq_).norm());
   }
-  if (travel > 0.0 && std::isfinite(travel))
-    s_.P.block<3, 3>(3, 3) += (params_.travel_orientation * travel) * (s_.R * gyration_inv_O_ * s_.R.transpose());
+  if (travel > 0.0 && std::isfinite(travel)) {
+    const Mat3 G_inv = s_.R * gyration_inv_O_ * s_.R.transpose();
+    s_.P.block<3, 3>(3, 3) += (0.5 * params_.travel_orientation * travel) * (G_inv + G_inv.transpose());  // exactly symmetric
+  }
   s_.q_window = q_meas;
   s_.window_time = 0.0;
 }
