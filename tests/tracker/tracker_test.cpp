@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <map>
 #include <cmath>
+#include <map>
 #include <thread>
 
 #include "inhand/core/error.hpp"
@@ -152,7 +152,8 @@ TEST(Tracker, ThreadedEqualsDeterministic) {
 // search around the estimate then matches poorly, and after kLostFrames such frames the object
 // is searched for as at the start: found again that far away, the σ of the position is widened
 // by the distance and the features move the estimate back onto the object. Without images (jt)
-// it stays off (and without the widening, so did jtf: 42 mm at the end).
+// it stays off (without the widening, an earlier version of the rule left jtf 42 mm off at the
+// end).
 TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
   const Recording& r = Recording::Get();
   const int n = std::min(r.session.num_samples(), 1500);  // 3 s, 15 frames
