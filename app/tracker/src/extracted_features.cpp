@@ -43,10 +43,10 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   // ketchup bottle that slipped 18 deg was otherwise matched to clutter and ended 26 mm off.
   FeatureParams p = params_;
   int radius = params_.max_search_radius;
+  const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);  // the object's centre, camera frame
   if (matched_well_) {
     radius = params_.search_radius;
     const auto P = f.covariance();
-    const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);
     if (X_C.z() > 1e-3) {
       const Eigen::Matrix<double, 2, 3> J = K.ProjectJacobian(X_C) * T_PC.linear().transpose();
       const Eigen::Matrix2d S = J * P.topLeftCorner<3, 3>() * J.transpose();
@@ -67,7 +67,7 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   step.relocalized = 0.0;
   step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false);  // no debug-only camera corners
   Inliers(step.match, T_PC, K, f, step.virtual_view, step.used_match, out);
-  bool well = static_cast<int>(out.size()) >= kWellMatched;
+  const bool well = static_cast<int>(out.size()) >= kWellMatched;
 
   // Lost: the kLostFrames frames before this one fused fewer than kWellMatched features after a
   // frame had matched well (matched poorly, or matched and gated: the estimate may have left the
@@ -84,7 +84,6 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     global.global_search_radius = params_.max_search_radius;
     MatchResult again = MatchFeatures(image, step.virtual_view.colour, &object_mask_, global, &hand_mask_, false);
     const MatchDebug& d = again.debug;
-    const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);
     if (d.global_cost < 0.5 * d.global_cost_unshifted && X_C.z() > 1e-3) {
       std::vector<int> used;
       std::vector<VisualFeature> found;
@@ -95,7 +94,6 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
         out = std::move(found);
         step.search_radius = params_.max_search_radius;
         step.relocalized = d.global_shift.norm() * X_C.z() / K.fx;
-        well = true;
       }
     }
   }

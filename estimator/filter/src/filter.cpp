@@ -121,7 +121,7 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
 }
 
 void Filter::Restore(const FilterState& state) {
-  INHAND_CHECK(state.b.size() == m_ && state.P.rows() == na_ && state.P.cols() == na_,
+  INHAND_CHECK(state.b.size() == m_ && state.q_window.size() == m_ && state.P.rows() == na_ && state.P.cols() == na_,
                "filter state of another hand or parameters");
   s_ = state;  // same sizes: Eigen and std::vector reuse their storage
   delta_.setZero();
@@ -194,7 +194,6 @@ void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt)
 
 void Filter::GrowWithTravel(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt) {
   constexpr double kWindow = 0.05;  // [s]
-  if (s_.q_window.size() != m_) s_.q_window = s_.q_prev, s_.window_time = 0.0;
   s_.window_time += dt;
   if (s_.window_time < kWindow) return;
   dq_ = q_meas - s_.q_window;  // over the window: the joints' noise telescopes
