@@ -72,6 +72,22 @@ int RunImport(const ImportCommand& cmd) {
     const auto v = Numbers(cmd.initial_sigma, 3, "--initial-sigma", "POS_M,ORIENT_RAD,BIAS_RAD");
     o.initial_sigma = std::array<double, 3>{v[0], v[1], v[2]};
   }
+  if (!cmd.joint_stiffness.empty()) {
+    if (!o.effort_is_external)
+      throw InputError("--joint-stiffness: the correction q - tau / k needs the external torques (--effort-is external)");
+    const std::string expected = "K or NAME=K,...[,*=K], stiffness K > 0 in N m/rad";
+    std::stringstream ss(cmd.joint_stiffness);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) {
+      const std::size_t eq = cell.find('=');
+      const std::string name = eq == std::string::npos ? "*" : cell.substr(0, eq);
+      const std::string value = eq == std::string::npos ? cell : cell.substr(eq + 1);
+      const double k = Numbers(value, 1, "--joint-stiffness", expected)[0];
+      if (name.empty() || !(k > 0.0)) throw InputError("--joint-stiffness: '" + cell + "', expected " + expected);
+      if (!o.joint_stiffness.emplace(name, k).second) throw InputError("--joint-stiffness: '" + name + "' given twice");
+    }
+    if (o.joint_stiffness.empty()) throw InputError("--joint-stiffness: empty, expected " + expected);
+  }
   o.start_s = cmd.start;
   o.end_s = cmd.end;
   o.time_origin_s = cmd.time_origin;

@@ -63,6 +63,8 @@ int main(int argc, char** argv) {
   import_cmd->add_option("--object-pose", import.object_pose, "ground truth: PoseStamped, TransformStamped or Odometry topic");
   import_cmd->add_option("--initial-pose", import.initial_pose, "x,y,z,qw,qx,qy,qz in the palm frame (default: the first ground truth)");
   import_cmd->add_option("--initial-sigma", import.initial_sigma, "POS_M,ORIENT_RAD,BIAS_RAD (default 0.02,0.087,0.087)");
+  import_cmd->add_option("--joint-stiffness", import.joint_stiffness,
+                         "elastic joints, N m/rad: K for every joint, or NAME=K,...[,*=K] (needs --effort-is external)");
   import_cmd->add_option("--start", import.start, "seconds after the first joint sample to start at");
   import_cmd->add_option("--end", import.end, "seconds after the first joint sample to end at");
   import_cmd->add_option("--time-origin", import.time_origin, "stamp [s since the epoch] that becomes t = 0 (default: the first joint sample's)");

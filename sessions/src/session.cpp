@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -196,6 +197,21 @@ Session Session::Load(const std::string& dir) {
     if (!pk.value.is_object()) pk.Fail("an object {\"NAME\": \"DIR\"}");
     for (auto it = pk.value.begin(); it != pk.value.end(); ++it)
       info.packages[it.key()] = pk[it.key()].String();
+  }
+  if (root["hand"].Has("joint_stiffness")) {
+    const jsonf::Field ks = root["hand"]["joint_stiffness"];
+    const auto stiffness = [](const jsonf::Field& f) {
+      const double k = f.value.is_number() ? f.value.get<double>() : 0.0;
+      if (!f.value.is_number() || !(k > 0.0) || !std::isfinite(k)) f.Fail("a finite stiffness > 0 in N m/rad");
+      return k;
+    };
+    if (ks.value.is_number()) {
+      info.joint_stiffness["*"] = stiffness(ks);
+    } else if (ks.value.is_object() && !ks.value.empty()) {
+      for (auto it = ks.value.begin(); it != ks.value.end(); ++it) info.joint_stiffness[it.key()] = stiffness(ks[it.key()]);
+    } else {
+      ks.Fail("a stiffness > 0 in N m/rad for every joint, or an object {\"JOINT\": N m/rad, \"*\": for the rest}");
+    }
   }
   info.object = root["object"]["model"].String();
   if (root.Has("conventions")) {
@@ -412,6 +428,20 @@ SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes)
   SessionModels models{LoadHandModel(session.Resolve(session.info().hand_urdf), options),
                        LoadObjectModel(session.Resolve(session.info().object), packages), {}};
   models.joint_columns = session.JointColumns(models.hand);
+  const std::map<std::string, double>& ks = session.info().joint_stiffness;
+  if (!ks.empty()) {
+    const std::vector<std::string> names = models.hand.QNames();
+    for (const auto& [name, k] : ks)
+      if (name != "*" && std::find(names.begin(), names.end(), name) == names.end())
+        throw InputError(session.Resolve("session.json") + ": field 'hand.joint_stiffness." + name +
+                         "': the hand has no independent joint of that name");
+    const auto all = ks.find("*");
+    models.hand.joint_stiffness.assign(names.size(), all != ks.end() ? all->second : 0.0);
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      const auto it = ks.find(names[j]);
+      if (it != ks.end()) models.hand.joint_stiffness[j] = it->second;
+    }
+  }
   return models;
 }
 
@@ -511,6 +541,10 @@ void SessionWriter::Commit() {
                        {"sigma_joint_bias", info_.sigma_joint_bias}}},
                      {"provenance", jsonf::Json::parse(info_.provenance_json)}};
   if (!info_.packages.empty()) doc["hand"]["packages"] = info_.packages;
+  if (info_.joint_stiffness.size() == 1 && info_.joint_stiffness.count("*"))
+    doc["hand"]["joint_stiffness"] = info_.joint_stiffness.at("*");
+  else if (!info_.joint_stiffness.empty())
+    doc["hand"]["joint_stiffness"] = info_.joint_stiffness;
   if (info_.camera) {
     const Intrinsics& K = *info_.camera;
     doc["camera"] = {{"width", K.width}, {"height", K.height}, {"fx", K.fx}, {"fy", K.fy},

@@ -242,6 +242,14 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     std::mt19937 r = effect_rng(Effect::kHandGeometry);
     hand = PerturbedHand(model_hand, rp.joint_origin_sigma, r, &joint_origin_offsets);
   }
+  // Each joint's true stiffness, around the nominal one the session states (a maker's figure,
+  // or a calibration): log-normal, so that it stays positive.
+  Eigen::VectorXd stiffness = Eigen::VectorXd::Constant(m, rp.joint_stiffness);
+  if (effects.Has(Effect::kHandDeflection)) {
+    std::mt19937 r = effect_rng(Effect::kHandDeflection);
+    std::normal_distribution<double> g(0.0, 1.0);  // its own: no value cached from another stream
+    for (int j = 0; j < m; ++j) stiffness[j] = rp.joint_stiffness * std::exp(rp.joint_stiffness_sigma * g(r));
+  }
   std::mt19937 torque_rng = effect_rng(Effect::kTorqueDrift);
   TorqueErrors torque_errors(m, rp, effects, torque_rng);
   const bool camera_sim = opt.images && effects.AnyCamera();
@@ -366,6 +374,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   info.hand_urdf = "model/hand/inhand_hand.urdf";
   info.object = "model/object/object.json";
   if (opt.images) info.camera = K_session;
+  if (effects.Has(Effect::kHandDeflection)) info.joint_stiffness["*"] = rp.joint_stiffness;
   // The recording starts when the hand is in place around the object (as with a real robot,
   // whose estimator is seeded by a vision system before the manipulation): the initial estimate
   // is the truth at that moment, off by the profile's error.
@@ -406,6 +415,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
                              {"colour_sigma", rp.colour_sigma},
                              {"joint_origin_sigma_m", rp.joint_origin_sigma},
                              {"joint_stiffness_Nm_per_rad", rp.joint_stiffness},
+                             {"joint_stiffness_sigma", rp.joint_stiffness_sigma},
                              {"pad_stiffness_N_per_m", rp.pad_stiffness},
                              {"pad_damping_Ns_per_m", rp.pad_damping},
                              {"torque_drift_sigma_Nm", rp.drift_sigma},
@@ -509,7 +519,7 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       Eigen::VectorXd q_meas(m), tau_meas(m);
       for (int j = 0; j < m; ++j) {
         // The encoder reads the motor side: ahead of the link by the load over the stiffness.
-        const double deflection = effects.Has(Effect::kHandDeflection) ? tau_filtered[j] / rp.joint_stiffness : 0.0;
+        const double deflection = effects.Has(Effect::kHandDeflection) ? tau_filtered[j] / stiffness[j] : 0.0;
         q_meas[j] = q[j] + deflection - bias[j] + noise.joint_sigma * gauss(rng);
         tau_meas[j] = tau_estimate[j] + noise.torque_sigma * gauss(rng);
       }
@@ -610,7 +620,11 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     realism["joint_origin_offsets_m"] = offsets;
   }
   if (effects.Has(Effect::kHandDeflection)) {
-    realism["joint_stiffness_Nm_per_rad"] = rp.joint_stiffness;
+    jsonf::Json ks = jsonf::Json::object();
+    const std::vector<std::string> q_names = hand.QNames();
+    for (int j = 0; j < m; ++j) ks[q_names[static_cast<std::size_t>(j)]] = stiffness[j];
+    realism["joint_stiffness_Nm_per_rad"] = ks;
+    realism["nominal_joint_stiffness_Nm_per_rad"] = rp.joint_stiffness;
     realism["deflection_convention"] = "q_motor (recorded, before bias and noise) = q_link + tau_contact / k";
   }
   if (opt.images) {

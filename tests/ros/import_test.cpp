@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <sstream>
 
 #include "inhand/core/error.hpp"
@@ -172,6 +173,17 @@ TEST(Import, WindowAndTimeOrigin) {
   EXPECT_NEAR(s.info().initial_T_PO.translation().x(), -0.03, 1e-15);
 }
 
+// An elastic hand's stiffness goes into session.json, by joint or for every joint.
+TEST(Import, JointStiffnessReachesTheSession) {
+  test::TempDir dir;
+  const std::string base = "--no-images --object-pose /mocap/object --effort-is external --joint-stiffness ";
+  ASSERT_EQ(test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "s", base + "thumb_flex1=35,*=20")).exit_code, 0);
+  EXPECT_EQ(Session::Load(dir / "s").info().joint_stiffness, (std::map<std::string, double>{{"*", 20.0}, {"thumb_flex1", 35.0}}));
+  ASSERT_EQ(test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "t", base + "12.5")).exit_code, 0);
+  const SessionModels models = LoadSessionModels(Session::Load(dir / "t"), false);
+  EXPECT_EQ(models.hand.joint_stiffness, std::vector<double>(16, 12.5));
+}
+
 // Bad input: one clear line naming what is wrong, exit 2, and no output folder.
 TEST(Import, BadInputIsOneClearLineAndNoOutput) {
   test::TempDir dir;
@@ -205,6 +217,10 @@ TEST(Import, BadInputIsOneClearLineAndNoOutput) {
       {Import(bag, dir / "out", "--no-images --initial-pose 1,2,3"), "--initial-pose: 3 numbers"},
       {Import(bag, dir / "out", "--no-images --initial-pose=0,0,0,2,0,0,0"), "has norm 2"},
       {Import(bag, dir / "out", "--no-images --effort-is measured " + gt), "--effort-is: 'measured'"},
+      {Import(bag, dir / "out", "--no-images --joint-stiffness 20 " + gt), "--joint-stiffness: the correction q - tau / k needs the external torques"},
+      {Import(bag, dir / "out", "--no-images --effort-is external --joint-stiffness index_flex1=-3 " + gt), "--joint-stiffness: 'index_flex1=-3'"},
+      {Import(bag, dir / "out", "--no-images --effort-is external --joint-stiffness stiff " + gt), "--joint-stiffness: 'stiff' is not a number"},
+      {Import(bag, dir / "out", "--no-images --effort-is external --joint-stiffness pinky_flex2=20 " + gt), "has no independent joint 'pinky_flex2'"},
   };
   for (const Case& c : cases) {
     const test::CommandResult r = test::RunInhand(c.args);

@@ -192,18 +192,32 @@ TEST(RealisticSimulation, JointDeflectionFollowsTorqueOverStiffness) {
   test::TempDir dir;
   Sim(dir / "s", "hand.deflection");
   const Csv meas = ReadCsv(dir / "s/joints.csv"), truth = ReadCsv(dir / "s/truth/joints.csv");
-  const double k = RealismParams().joint_stiffness;
-  double largest = 0.0;
+  // The session states the nominal stiffness; each joint's true one is drawn around it.
+  const double nominal = RealismParams().joint_stiffness, sigma = RealismParams().joint_stiffness_sigma;
+  EXPECT_EQ(nlohmann::json::parse(test::ReadFile(dir / "s/session.json")).at("hand").at("joint_stiffness").get<double>(), nominal);
+  const nlohmann::json drawn = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json")).at("realism").at("joint_stiffness_Nm_per_rad");
+  ASSERT_EQ(drawn.size(), truth.header.size() - 1);
+  double largest = 0.0, sum_log = 0.0, sum_log2 = 0.0;
   for (std::size_t i = 1; i < truth.header.size(); ++i) {
     const int q = meas.Col("q:" + truth.header[i]), tau = meas.Col("tau:" + truth.header[i]);
     ASSERT_GE(q, 0);
     ASSERT_GE(tau, 0);
+    const double k = drawn.at(truth.header[i]).get<double>();
+    const double z = std::log(k / nominal) / sigma;
+    EXPECT_LT(std::abs(z), 4.0) << truth.header[i] << ": k " << k;
+    sum_log += z;
+    sum_log2 += z * z;
     for (std::size_t s = 0; s < meas.rows.size(); ++s) {
       // The encoder (motor side) is ahead of the link by the load over the stiffness.
       ASSERT_NEAR(meas.rows[s][q] - truth.rows[s][i], meas.rows[s][tau] / k, 1e-12) << truth.header[i] << " sample " << s;
       largest = std::max(largest, std::abs(meas.rows[s][q] - truth.rows[s][i]));
     }
   }
+  // 16 draws of N(0, 1) in log(k / nominal) / σ: a spread, not one value for every joint.
+  const double n = static_cast<double>(truth.header.size() - 1);
+  const double sd = std::sqrt(sum_log2 / n - (sum_log / n) * (sum_log / n));
+  EXPECT_GT(sd, 0.4);
+  EXPECT_LT(sd, 1.8);
   EXPECT_GT(largest, 0.03);  // the grasp loads the joints: > 1.7 deg of deflection somewhere
 }
 

@@ -104,6 +104,34 @@ TEST(Session, WriteReadRoundTripIsExact) {
   EXPECT_EQ(models.object.name, "ketchup_bottle");
 }
 
+// hand.joint_stiffness: one value for every joint, or by name with "*" for the rest; the hand
+// the session loads carries it in its configuration order.
+TEST(Session, JointStiffnessReachesTheHandByName) {
+  test::TempDir dir;
+  SessionInfo info = Info();
+  info.joint_stiffness = {{"*", 20.0}, {"thumb_flex1", 35.0}};
+  SessionWriter w(dir / "s", info, LoadHandModel(test::ProjectAsset(kHand), {{}, false}).QNames());
+  for (int k = 0; k < 3; ++k) w.AddJointSample(0.001 * k, Eigen::VectorXd::Zero(16), Eigen::VectorXd::Zero(16));
+  w.Commit();
+  const Session s = Session::Load(dir / "s");
+  EXPECT_EQ(s.info().joint_stiffness, info.joint_stiffness);
+  const SessionModels models = LoadSessionModels(s, false);
+  const std::vector<std::string> names = models.hand.QNames();
+  ASSERT_EQ(models.hand.joint_stiffness.size(), 16u);
+  for (std::size_t j = 0; j < 16; ++j) EXPECT_EQ(models.hand.joint_stiffness[j], names[j] == "thumb_flex1" ? 35.0 : 20.0) << names[j];
+
+  // One number for every joint is written as a number.
+  info.joint_stiffness = {{"*", 12.5}};
+  SessionWriter w2(dir / "t", info, names);
+  w2.AddJointSample(0.0, Eigen::VectorXd::Zero(16), Eigen::VectorXd::Zero(16));
+  w2.Commit();
+  EXPECT_NE(test::ReadFile(dir / "t/session.json").find("\"joint_stiffness\": 12.5"), std::string::npos);
+  const SessionModels rigid_unless_named = LoadSessionModels(Session::Load(dir / "t"), false);
+  EXPECT_EQ(rigid_unless_named.hand.joint_stiffness, std::vector<double>(16, 12.5));
+  // Without the field every joint is rigid.
+  EXPECT_TRUE(LoadSessionModels(Session::Load(WriteSession(dir, "u")), false).hand.joint_stiffness.empty());
+}
+
 TEST(Session, WriterIsAllOrNothing) {
   test::TempDir dir;
   {
@@ -184,6 +212,27 @@ TEST_F(BadSession, TorqueColumnsMustFollowPositions) {
 TEST_F(BadSession, MalformedJson) {
   Replace("session.json", "\"name\": \"unit\",", "\"name\": \"unit\"");
   ExpectError({"session.json:", "malformed JSON"});
+}
+
+TEST_F(BadSession, JointStiffness) {
+  const std::string good = test::ReadFile(path_ + "/session.json");
+  const auto with = [&](const std::string& value) {
+    std::ofstream(path_ + "/session.json") << std::regex_replace(good, std::regex("\"hand\": \\{"), "\"hand\": {\"joint_stiffness\": " + value + ",");
+  };
+  with("-20");
+  ExpectError({"session.json", "'hand.joint_stiffness'", "-20"});
+  with("0");
+  ExpectError({"session.json", "'hand.joint_stiffness'"});
+  with("\"stiff\"");
+  ExpectError({"session.json", "'hand.joint_stiffness'", "N m/rad"});
+  with("{}");
+  ExpectError({"session.json", "'hand.joint_stiffness'", "N m/rad"});
+  with("{\"index_flex1\": null}");
+  ExpectError({"session.json", "'hand.joint_stiffness.index_flex1'"});
+  with("{\"pinky_flex2\": 20}");
+  ExpectError({"session.json", "'hand.joint_stiffness.pinky_flex2'", "no independent joint"}, true);
+  with("{\"index_flex1\": 20, \"*\": 30}");
+  EXPECT_EQ(LoadSessionModels(Session::Load(path_), false).hand.joint_stiffness[1], 20.0);  // index_flex1, second in the URDF
 }
 
 TEST_F(BadSession, ImpossibleIntrinsics) {

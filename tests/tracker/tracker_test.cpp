@@ -2,11 +2,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <thread>
 
 #include "inhand/core/error.hpp"
 #include "inhand/sessions/session.hpp"
+#include "inhand/sessions/simulator.hpp"
 #include "inhand/tracker/tracker.hpp"
 #include "test_support.hpp"
 
@@ -175,6 +178,87 @@ TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
   EXPECT_LT(error["jtf"], 0.008);
   EXPECT_GT(relocalized, 0.015);  // about the 30 mm it was off, at the object's depth
   EXPECT_LT(relocalized, 0.045);
+}
+
+// An elastic hand (the simulator's hand.deflection alone, every joint at the session's nominal
+// stiffness): sets with torques fuse the links' true positions, q − τ / k; sets without fuse
+// what the encoders read; a joint given no stiffness is rigid.
+TEST(Tracker, SetsWithTorquesUndeflectTheJointsOfAnElasticHand) {
+  test::TempDir dir;
+  SimulateOptions o;
+  o.scenario = "ketchup-power-grasp";
+  o.out_dir = dir / "s";
+  o.seed = 3;
+  o.noise = NoiseProfile::kNone;
+  o.images = false;
+  o.duration_scale = 0.5;
+  o.effects = Effects::Parse("hand.deflection", "test");
+  o.realism.joint_stiffness_sigma = 0.0;
+  Simulate(o);
+  const Session s = Session::Load(dir / "s");
+  SessionModels models = LoadSessionModels(s, false);
+  ASSERT_EQ(models.hand.joint_stiffness, std::vector<double>(16, o.realism.joint_stiffness));
+  // The links' true positions (truth/joints.csv: t, then the hand's joints by name).
+  std::ifstream in(dir / "s/truth/joints.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  for (std::stringstream ss(line); std::getline(ss, line, ',');) header.push_back(line);
+  const std::vector<std::string> names = models.hand.QNames();
+  std::vector<Eigen::VectorXd> truth;
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    for (std::stringstream ss(line); std::getline(ss, line, ',');) row.push_back(std::stod(line));
+    Eigen::VectorXd q(16);
+    for (std::size_t j = 0; j < 16; ++j)
+      q[static_cast<long>(j)] = row[static_cast<std::size_t>(std::find(header.begin(), header.end(), names[j]) - header.begin())];
+    truth.push_back(q);
+  }
+  ASSERT_EQ(static_cast<int>(truth.size()), s.num_samples());
+
+  models.hand.joint_stiffness[5] = 0.0;  // middle_flex1: rigid
+  Tracker jt(models.hand, models.object, Set("jt"), TrackerParams()), j(models.hand, models.object, Set("j"), TrackerParams());
+  for (Tracker* t : {&jt, &j}) t->Start(s.t(0), s.info().initial_T_PO, {});
+  double undeflected = 0.0, deflected = 0.0;
+  Eigen::VectorXd q(16), tau(16);
+  for (int k = 0; k < s.num_samples(); ++k) {
+    for (std::size_t c = 0; c < 16; ++c) {
+      q[static_cast<long>(c)] = s.q(k)[models.joint_columns[c]];
+      tau[static_cast<long>(c)] = s.tau(k)[models.joint_columns[c]];
+    }
+    jt.AddJointSample(s.t(k), q, tau);
+    j.AddJointSample(s.t(k), q, tau);
+    const std::size_t kk = static_cast<std::size_t>(k);
+    ASSERT_EQ(j.joints(), q) << "sample " << k;
+    ASSERT_EQ(jt.joints()[5], q[5]) << "sample " << k;
+    for (long c = 0; c < 16; ++c) {
+      if (c == 5) continue;
+      undeflected = std::max(undeflected, std::abs(jt.joints()[c] - truth[kk][c]));
+      deflected = std::max(deflected, std::abs(q[c] - truth[kk][c]));
+    }
+  }
+  EXPECT_LT(undeflected, 1e-12);
+  EXPECT_GT(deflected, 0.03);  // > 1.7 deg somewhere under the grasp
+
+  models.hand.joint_stiffness.resize(3);
+  EXPECT_THROW(
+      {
+        try {
+          Tracker t(models.hand, models.object, Set("jt"), TrackerParams());
+        } catch (const InputError& e) {
+          EXPECT_NE(std::string(e.what()).find("3 values for 16 joints"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      InputError);
+  models.hand.joint_stiffness.assign(16, 20.0);
+  models.hand.joint_stiffness[1] = -1.0;
+  try {
+    Tracker t(models.hand, models.object, Set("jt"), TrackerParams());
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("joint 'index_flex1' is -1"), std::string::npos) << e.what();
+  }
 }
 
 // Frames older than the horizon, or captured before the first joint sample, are dropped and

@@ -16,6 +16,7 @@
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <sstream>
 #include <thread>
 #include <utility>
 
@@ -69,6 +70,17 @@ struct Tracker::Impl {
   Impl(const HandModel& h, const ObjectModel& o, const Modalities& m, const TrackerParams& p, const TrackerOptions& opt)
       : hand(h), object(o), modalities(m), params(p), options(opt), query(h, o), filter(h, query, p.filter, FilterOptionsFor(o, m)) {
     params.Validate();
+    const std::vector<double>& ks = h.joint_stiffness;
+    if (!ks.empty() && ks.size() != static_cast<std::size_t>(h.num_q()))
+      throw InputError("hand joint_stiffness: " + std::to_string(ks.size()) + " values for " + std::to_string(h.num_q()) +
+                       " joints, expected one per joint or none");
+    for (std::size_t j = 0; j < ks.size(); ++j) {
+      if (std::isfinite(ks[j]) && ks[j] >= 0.0) continue;
+      std::ostringstream os;
+      os << "hand joint_stiffness of joint '" << h.QNames()[j] << "' is " << ks[j] << ", expected >= 0 N m/rad (0: rigid)";
+      throw InputError(os.str());
+    }
+    deflect = m.torque && std::any_of(ks.begin(), ks.end(), [](double k) { return k > 0.0; });
     if (!(options.horizon >= 0.0) || options.history_samples < 1 || options.max_queued_images < 1)
       throw InputError("tracker options: horizon must be >= 0 s, history_samples and max_queued_images >= 1");
     ring.resize(static_cast<std::size_t>(options.history_samples));
@@ -96,7 +108,17 @@ struct Tracker::Impl {
     }
   }
 
-  Eigen::VectorXd q_used;  // the sample as fused (clamped to the limits when asked)
+  Eigen::VectorXd q_used;  // the sample as fused (undeflected, clamped to the limits when asked)
+  bool deflect = false;    // sets with torques on a hand with joint stiffness
+
+  // The encoder reads the motor side; the link lags it by the external torque over the
+  // stiffness (HandModel::joint_stiffness): q_link = q_recorded − τ / k.
+  void Undeflect(const Eigen::Ref<const Eigen::VectorXd>& tau) {
+    for (int j = 0; j < q_used.size(); ++j) {
+      const double k = hand.joint_stiffness[static_cast<std::size_t>(j)];
+      if (k > 0.0 && std::isfinite(tau[j])) q_used[j] -= tau[j] / k;
+    }
+  }
 
   Slot& At(long k) { return ring[static_cast<std::size_t>(k % static_cast<long>(ring.size()))]; }
 
@@ -124,6 +146,7 @@ struct Tracker::Impl {
     }
     if (q_used.size() != q.size()) q_used.resize(q.size());  // once
     q_used = q;
+    if (deflect) Undeflect(tau);
     if (params.joint_clamp_to_limits) ClampToLimits(hand, q_used);
     const double dt = started ? t - last_t : 0.0;
     if (!started) {
@@ -448,6 +471,7 @@ double Tracker::t() const { return impl_->last_t; }
 Transform Tracker::T_PO() const { return impl_->filter.T_PO(); }
 Eigen::MatrixXd Tracker::covariance() const { return impl_->filter.covariance(); }
 const Eigen::VectorXd& Tracker::biases() const { return impl_->filter.biases(); }
+const Eigen::VectorXd& Tracker::joints() const { return impl_->q_used; }
 const FilterTrace& Tracker::trace() const { return impl_->filter.trace(); }
 const Filter& Tracker::filter() const { return impl_->filter; }
 const VisualStep& Tracker::last_visual() const { return impl_->last_visual; }

@@ -354,6 +354,11 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   const HandModel hand = LoadHandModel(opt.hand_urdf, hand_options);
   const std::vector<std::string> names = hand.QNames();
   if (names.empty()) throw InputError(opt.hand_urdf + ": the hand has no moving joints");
+  for (const auto& [name, k] : opt.joint_stiffness) {
+    if (name != "*" && std::find(names.begin(), names.end(), name) == names.end())
+      throw InputError("import: --joint-stiffness: " + opt.hand_urdf + " has no independent joint '" + name + "'");
+    if (!(k > 0.0 && std::isfinite(k))) throw InputError("import: --joint-stiffness: " + name + " must be > 0 N m/rad");
+  }
 
   std::unique_ptr<Recording> rec = OpenRecording(opt.recording);
   const std::string& path = rec->path();
@@ -577,6 +582,7 @@ ImportReport ImportRecording(const ImportOptions& opt, const std::function<void(
   for (const auto& [name, dir] : opt.packages) info.packages[name] = fs::absolute(dir).lexically_normal().string();
   info.object = fs::absolute(opt.object).lexically_normal().string();
   if (!frames.empty()) info.camera = K;
+  info.joint_stiffness = opt.joint_stiffness;
   if (opt.initial_pose) info.initial_T_PO = *opt.initial_pose;
   else if (!gt.empty()) info.initial_T_PO = gt.front().second.ToTransform();
   else

@@ -50,6 +50,7 @@ struct ImportCommand {
   bool no_images = false;
   std::string initial_pose;   // x,y,z,qw,qx,qy,qz
   std::string initial_sigma;  // POS_M,ORIENT_RAD,BIAS_RAD
+  std::string joint_stiffness;  // K, or NAME=K,...[,*=K] [N m/rad]
   std::optional<double> start, end, time_origin;
 };
 int RunImport(const ImportCommand& cmd);

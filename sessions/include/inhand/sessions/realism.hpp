@@ -67,7 +67,9 @@ struct RealismParams {
   int max_slabs = 8;                   //     across each solid's longest axis, at most this many
   // The hand.
   double joint_origin_sigma = 0.0003;  // [m] per axis of every joint origin (link lengths)
-  double joint_stiffness = 20.0;       // [N m/rad] q_motor = q_link + tau / k
+  double joint_stiffness = 20.0;       // [N m/rad] q_motor = q_link + tau / k, nominal (the
+                                       // session's hand.joint_stiffness)
+  double joint_stiffness_sigma = 0.2;  // each joint's true k: nominal · exp(σ g), g ~ N(0, 1)
   double pad_stiffness = 20000.0;       // [N/m] fingertip pads (distal links)
   double pad_damping = 400.0;           // [N s/m]
   // The torques.

@@ -21,6 +21,8 @@ struct SessionInfo {
   std::string hand_urdf;
   std::map<std::string, std::string> packages;  // package name → directory
   std::string object;                           // object description (.json or .urdf)
+  // hand.joint_stiffness [N m/rad]: by joint name, or under "*" one value for every joint.
+  std::map<std::string, double> joint_stiffness;
   std::optional<Intrinsics> camera;             // absent: no images
   Transform initial_T_PO = Transform::Identity();
   double sigma_position = 0.020;                // [m]   initial σ of the object position
@@ -101,7 +103,8 @@ class Session {
 };
 
 // The hand and object a session refers to, loaded through io/ with the session's package map,
-// and the session's joint columns matched to the hand.
+// and the session's joint columns matched to the hand. The hand carries the session's joint
+// stiffness (HandModel::joint_stiffness).
 struct SessionModels {
   HandModel hand;
   ObjectModel object;

@@ -132,6 +132,8 @@ class Tracker {
   void Start(double t, const Transform& T_PO, const StartSigmas& sigmas = {});
   // A joint sample: positions and external torques (zeros without torque sensing), in the
   // hand's configuration order. Samples not later than the previous one are dropped (counted).
+  // Sets with torques on a hand with joint stiffness (HandModel::joint_stiffness) fuse the
+  // link's position, q − τ / k: the encoder of an elastic joint reads the motor side.
   void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& tau);
   // A camera image (RGB or grey) captured at t_capture by a camera at T_PC (palm frame) with
@@ -147,6 +149,8 @@ class Tracker {
   Transform T_PO() const;
   Eigen::MatrixXd covariance() const;  // of (δp, δθ, δb)
   const Eigen::VectorXd& biases() const;
+  const Eigen::VectorXd& joints() const;  // the newest sample's positions as fused (undeflected,
+                                          // clamped when asked); empty before the first
   const FilterTrace& trace() const;    // of the newest joint sample (and images fused at it)
   const Filter& filter() const;
   const VisualStep& last_visual() const;

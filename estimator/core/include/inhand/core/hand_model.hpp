@@ -54,6 +54,12 @@ struct HandModel {
   int root_link = 0;                     // the palm frame P is this link's frame
   // Per link: the moving joints from the root to the link (root first).
   std::vector<std::vector<int>> support;
+  // Per configuration entry (q order): the joint's stiffness between motor and link [N m/rad],
+  // 0 for a rigid joint; empty: every joint rigid. Not part of a URDF: a session's
+  // hand.joint_stiffness, or the caller. A tendon-driven or series-elastic hand's encoder reads
+  // the motor side, and under an external torque τ (sessions/FORMAT.md's sign) the link lags it:
+  // q_link = q_recorded − τ / k. Estimates that use torques correct the joints by that.
+  std::vector<double> joint_stiffness;
 
   int num_q() const { return static_cast<int>(q_joints.size()); }
   // -1 when absent.

@@ -31,6 +31,7 @@ struct ImportOptions {
   std::string object_pose_topic;                // "": no ground truth
   std::optional<Transform> initial_pose;        // palm frame; else the first ground truth
   std::optional<std::array<double, 3>> initial_sigma;  // position [m], orientation [rad], bias [rad]
+  std::map<std::string, double> joint_stiffness;  // [N m/rad] by joint, "*": the rest (session.json's hand.joint_stiffness)
   std::optional<double> start_s, end_s;         // window, seconds after the first joint sample
   std::optional<double> time_origin_s;          // stamp [s] that becomes t = 0 (default: the first joint sample's)
   double max_tf_gap_s = 0.1;                    // extrapolation of a TF edge beyond its samples
