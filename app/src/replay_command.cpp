@@ -259,6 +259,8 @@ int RunReplay(const ReplayCommand& cmd) {
                   {"mcap", mcap ? "replay.mcap" : Json(nullptr)},
                   {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
                   {"parameters", Json::parse(TrackerParamsToJson(player.params()))},
+                  // What the sets with torques undeflected the joints with (null: rigid joints).
+                  {"joint_stiffness", session.info().joint_stiffness.empty() ? Json(nullptr) : Json(session.info().joint_stiffness)},
                   {"joint_samples_rejected", player.input_report().rejected_samples.size()},
                   {"frames_before_first_sample", player.input_report().frames_before_first_sample},
                   {"samples_without_truth", player.input_report().samples_without_truth}};

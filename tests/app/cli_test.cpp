@@ -229,6 +229,7 @@ TEST(Cli, ReplayEndToEnd) {
     EXPECT_TRUE(std::filesystem::exists(dir / ("replay/" + std::string(f)))) << f;
   std::ifstream in(dir / "replay/summary.json");
   const Json s = Json::parse(in);
+  EXPECT_TRUE(s.at("joint_stiffness").is_null());  // the simulator's rigid hand
   for (const char* set : {"j", "jt", "jta", "jtf"}) {
     const Json& m = s.at("modalities").at(set);
     // Noise-free session: the estimate starts at the truth and stays within a few centimetres.
