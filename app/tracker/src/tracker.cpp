@@ -112,11 +112,12 @@ struct Tracker::Impl {
   bool deflect = false;    // sets with torques on a hand with joint stiffness
 
   // The encoder reads the motor side; the link lags it by the external torque over the
-  // stiffness (HandModel::joint_stiffness): q_link = q_recorded − τ / k.
+  // stiffness (HandModel::joint_stiffness): q_link = q_recorded − τ / k. τ is finite here:
+  // ScreenJointSample refused the sample otherwise.
   void Undeflect(const Eigen::Ref<const Eigen::VectorXd>& tau) {
     for (int j = 0; j < q_used.size(); ++j) {
       const double k = hand.joint_stiffness[static_cast<std::size_t>(j)];
-      if (k > 0.0 && std::isfinite(tau[j])) q_used[j] -= tau[j] / k;
+      if (k > 0.0) q_used[j] -= tau[j] / k;
     }
   }
 
