@@ -200,15 +200,11 @@ Session Session::Load(const std::string& dir) {
   }
   if (root["hand"].Has("joint_stiffness")) {
     const jsonf::Field ks = root["hand"]["joint_stiffness"];
-    const auto stiffness = [](const jsonf::Field& f) {
-      const double k = f.value.is_number() ? f.value.get<double>() : 0.0;
-      if (!f.value.is_number() || !(k > 0.0) || !std::isfinite(k)) f.Fail("a finite stiffness > 0 in N m/rad");
-      return k;
-    };
     if (ks.value.is_number()) {
-      info.joint_stiffness["*"] = stiffness(ks);
+      info.joint_stiffness["*"] = ks.PositiveNumber("N m/rad");
     } else if (ks.value.is_object() && !ks.value.empty()) {
-      for (auto it = ks.value.begin(); it != ks.value.end(); ++it) info.joint_stiffness[it.key()] = stiffness(ks[it.key()]);
+      for (auto it = ks.value.begin(); it != ks.value.end(); ++it)
+        info.joint_stiffness[it.key()] = ks[it.key()].PositiveNumber("N m/rad");
     } else {
       ks.Fail("a stiffness > 0 in N m/rad for every joint, or an object {\"JOINT\": N m/rad, \"*\": for the rest}");
     }

@@ -28,6 +28,7 @@ struct Field {
 
   double Number() const;
   double PositiveNumber() const;
+  double PositiveNumber(const std::string& unit) const;  // the message names the unit
   double NonNegativeNumber() const;
   int Integer() const;
   std::string String() const;
