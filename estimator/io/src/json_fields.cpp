@@ -53,11 +53,10 @@ double Field::Number() const {
   return v;
 }
 
-double Field::PositiveNumber() const { return PositiveNumber(""); }
-
 double Field::PositiveNumber(const std::string& unit) const {
   const double v = value.is_number() ? value.get<double>() : 0.0;
-  if (!value.is_number() || !(v > 0.0) || !std::isfinite(v)) Fail(unit.empty() ? "a finite number > 0" : "a finite number > 0 in " + unit);
+  if (!value.is_number() || !(v > 0.0) || !std::isfinite(v))
+    Fail(unit.empty() ? "a finite number > 0" : "a finite number > 0 in " + unit);
   return v;
 }
 

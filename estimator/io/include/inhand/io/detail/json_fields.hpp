@@ -27,8 +27,7 @@ struct Field {
   std::size_t Size() const;  // arrays; throws otherwise
 
   double Number() const;
-  double PositiveNumber() const;
-  double PositiveNumber(const std::string& unit) const;  // the message names the unit
+  double PositiveNumber(const std::string& unit = "") const;  // a unit, if given, is in the message
   double NonNegativeNumber() const;
   int Integer() const;
   std::string String() const;
