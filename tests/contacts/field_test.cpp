@@ -377,6 +377,52 @@ TEST(ContactField, BadParametersAreNamed) {
   EXPECT_THROW(AttachContactField(o, options, "x.json"), InputError);
 }
 
+// The outline's point (issue 16): seen from 300 mm, a 10 mm cylinder's outline is the line where
+// its normal is perpendicular to the line of sight, at cos φ = r / d about its axis, for every z;
+// a box's, the edge past which the next face turns away.
+TEST(ContactField, GrazingPointIsWhereTheLineOfSightLeavesTheSurface) {
+  DistanceFieldParams params;
+  params.spacing = 1e-3;
+  const double r = 0.010, d = 0.300;
+  const DistanceField cylinder = BuildDistanceFieldFromPieces({ConvexPiece::Cylinder(r, 0.040, Transform::Identity())}, params);
+  const Vec3 eye(d, 0.0, 0.0);
+  const double phi = std::acos(r / d);
+  const auto on = [](double radius, double angle, double z) { return Vec3(radius * std::cos(angle), radius * std::sin(angle), z); };
+  for (const double offset : {0.0, 0.0004}) {  // on the field's surface, and 0.4 mm outside it
+    const double radius = r + offset;
+    const double grazing = std::acos(radius / d);
+    for (const double sign : {1.0, -1.0}) {
+      const Vec3 start = on(radius, sign * (phi - 30.0 * M_PI / 180), 0.005);
+      const Vec3 g = GrazingPoint(cylinder, start, eye, 0.008);  // 30 deg of arc is 5.2 mm
+      EXPECT_NEAR(std::hypot(g.x(), g.y()), radius, 5e-5) << offset;
+      // Within the field's normals (central differences of a trilinear field, 1 mm grid: 1.2 deg
+      // off here), 0.2 mm of arc, which the camera sees along its line of sight.
+      EXPECT_NEAR(std::atan2(g.y(), g.x()), sign * grazing, 0.03) << offset << " " << sign;
+      EXPECT_NEAR(g.z(), 0.005, 5e-4);
+      const Vec3 n(std::cos(std::atan2(g.y(), g.x())), std::sin(std::atan2(g.y(), g.x())), 0.0);
+      EXPECT_LT(std::abs(n.dot((g - eye).normalized())), 0.03);
+      // A roll about the axis moves the grazing point along the line of sight, unlike the start.
+      const Vec3 roll = Vec3::UnitZ().cross(g), roll_start = Vec3::UnitZ().cross(start);
+      EXPECT_LT(roll.cross((g - eye).normalized()).norm(), 0.05 * r);
+      EXPECT_GT(roll_start.cross((start - eye).normalized()).norm(), 0.45 * r);
+    }
+  }
+  // Too far to walk, and a point the eye does not see: left where they are.
+  const Vec3 far = on(r, phi - 30.0 * M_PI / 180, 0.0);
+  EXPECT_EQ(GrazingPoint(cylinder, far, eye, 0.002), far);
+  const Vec3 behind = on(r, phi + 20.0 * M_PI / 180, 0.0);
+  EXPECT_EQ(GrazingPoint(cylinder, behind, eye, 0.008), behind);
+
+  const DistanceField box = BuildDistanceFieldFromPieces({ConvexPiece::Box(Vec3(0.02, 0.02, 0.02), Transform::Identity())}, params);
+  const Vec3 face(0.02, 0.012, 0.003);  // on the +x face; the +y face turns away from the eye
+  const Vec3 edge = GrazingPoint(box, face, eye, 0.020);
+  // On the edge, within the field's rounding of it (about half a spacing); the walk followed the
+  // line of sight's slope in z (3 mm over 12 mm): 2 mm up over the 8 mm to the edge.
+  EXPECT_NEAR(edge.x(), 0.02, 6e-4);
+  EXPECT_NEAR(edge.y(), 0.02, 6e-4);
+  EXPECT_NEAR(edge.z(), 0.005, 5e-4);
+}
+
 // The YCB scans as a user loads them (visual scan + VHACD pieces): the field is the scan's
 // closed surface. Sphere (an Allegro fingertip's radius) and capsule pushed towards the centre
 // along three directions.

@@ -37,6 +37,8 @@ class ExtractedFeatures {
   // the virtual depth, measured pixel undistorted), with their indices into match.matches.
   void Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
                const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const;
+  static bool OnOutline(const RenderOutput& view, int x, int y);
+  static constexpr int kOutlinePixels = 2;  // a corner this close to the background is on the outline
   static constexpr int kWellMatched = 8;  // inliers on the object that end the wide first search
   static constexpr int kLostFrames = 3;   // frames in a row that fused fewer, after which the
                                           // object is searched for once more as at the start

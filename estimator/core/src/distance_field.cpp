@@ -430,4 +430,34 @@ double DistanceField::Distance(const Vec3& p_O, Vec3* unit_gradient) const {
   return d;
 }
 
+Vec3 GrazingPoint(const DistanceField& field, const Vec3& x, const Vec3& eye, double max_travel) {
+  const double step = 0.25 * field.spacing;
+  const double level = field.Distance(x);
+  const auto facing = [&](Vec3& p) {  // p onto the level set; returns n · v there (< 0: faces the eye)
+    Vec3 n;
+    for (int i = 0; i < 3; ++i) p -= (field.Distance(p, &n) - level) * n;
+    return n.dot((p - eye).normalized());
+  };
+  Vec3 a = x;
+  if (!(std::abs(level) < 4.0 * field.spacing) || !(facing(a) < 0.0)) return x;
+  for (double travelled = 0.0; travelled < max_travel; travelled += step) {
+    Vec3 n;
+    field.Distance(a, &n);
+    const Vec3 v = (a - eye).normalized();
+    const Vec3 u = v - v.dot(n) * n;
+    if (!(u.norm() > 1e-9)) return x;
+    Vec3 b = a + step * u.normalized();
+    if (facing(b) >= 0.0) {  // grazed between a and b
+      for (int i = 0; i < 8; ++i) {
+        Vec3 m = 0.5 * (a + b);
+        const bool faces = facing(m) < 0.0;
+        (faces ? a : b) = m;
+      }
+      return a;
+    }
+    a = b;
+  }
+  return x;
+}
+
 }  // namespace inhand

@@ -50,6 +50,18 @@ DistanceField BuildDistanceFieldFromMesh(const std::vector<const TriangleMesh*>&
 DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& pieces,
                                            const DistanceFieldParams& params);
 
+// Where the line of sight from `eye` grazes the surface near `x`, a point on (or near) it that
+// the eye sees: the outline of the object there. A point a little inside the outline (the depth
+// of a pixel next to the background) walks over the surface away from the eye (the line of sight
+// projected on the tangent plane, back onto the surface along the gradient), in steps of a
+// quarter of the spacing, until the surface turns away from the eye, then bisects to where it
+// grazes. A smooth body's outline is reached where its normal is perpendicular to the line of
+// sight; a crease (a box's edge, a cap's rim) stops the walk on it. The walk keeps x's distance
+// to the field's surface (a visual mesh a little off the pieces stays off them). Returns x
+// itself when the surface there does not face the eye, when x is farther than 4 spacings from
+// the surface, or when no grazing point lies within `max_travel` [m].
+Vec3 GrazingPoint(const DistanceField& field, const Vec3& x, const Vec3& eye, double max_travel);
+
 // Signed distance of `p` to one convex piece (exact for primitives and, inside, for hulls;
 // outside a hull, exact through the closest point on its triangles). For tests and builders.
 double PieceSignedDistance(const ConvexPiece& piece, const Vec3& p);
