@@ -34,7 +34,8 @@ class ExtractedFeatures {
   std::vector<int> object_meshes_;
   std::vector<std::uint8_t> object_mask_, hand_mask_;
   // The inliers of `match` that lie on the object in `view`, as features (object point through
-  // the virtual depth, measured pixel undistorted), with their indices into match.matches.
+  // the virtual depth, measured pixel undistorted; on the outline, OnOutline, the point where
+  // the line of sight grazes the surface), with their indices into match.matches.
   void Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
                const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const;
   static bool OnOutline(const RenderOutput& view, int x, int y);
