@@ -717,6 +717,40 @@ TEST(Filter, WidenPoseAddsToThePoseVarianceOnly) {
     EXPECT_THROW(f.WidenPose(sp, so), InputError);
 }
 
+// Relocate puts the object at the given pose with the given covariance; the pose forgets its
+// correlations, the biases keep their own variance; the contacts that moved the object with the
+// fingers are dropped (the next Predict leaves it where it was put). A covariance that is not
+// symmetric positive definite, or a pose that is not finite, is refused.
+TEST(Filter, RelocatePutsTheObjectWhereItWasMeasured) {
+  FingerScene s;
+  Filter f = s.Started(At(Vec3(0.0, 0.07, 0.025)), PerfectContacts(), false);  // penetrating: a contact
+  f.Predict(s.q0, 0.001);
+  f.UpdateContacts(Eigen::Vector2d::Zero());
+  ASSERT_FALSE(f.state().active.empty());
+  ASSERT_GT(f.covariance().block(0, 6, 6, 2).cwiseAbs().maxCoeff(), 0.0);  // the pose is correlated with the biases
+  const Eigen::MatrixXd bias_block = f.covariance().bottomRightCorner(2, 2);
+  const Transform T = MakeTransform(Vec3(0.01, 0.2, -0.03), ExpSO3(Vec3(0.3, -2.0, 0.5)));
+  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Random();
+  const Mat6 C = A * A.transpose() * 1e-4 + Mat6::Identity() * 1e-6;
+  f.Relocate(T, C);
+  EXPECT_LT((f.position() - T.translation()).norm(), 1e-15);
+  EXPECT_LT((f.rotation() - T.linear()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((f.covariance().topLeftCorner<6, 6>() - C).cwiseAbs().maxCoeff(), 1e-18);
+  EXPECT_EQ(f.covariance().block(0, 6, 6, 2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(f.covariance().block(6, 0, 2, 6).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(f.covariance().bottomRightCorner(2, 2), bias_block);
+  EXPECT_TRUE(f.state().active.empty());
+  f.Predict(Eigen::Vector2d(0.2, 0.1), 0.001);  // the finger moves; nothing holds the object
+  EXPECT_LT((f.position() - T.translation()).norm(), 1e-15);
+  Mat6 asymmetric = C;
+  asymmetric(0, 1) += 1e-3;
+  for (const Mat6& bad : {Mat6(-C), asymmetric, Mat6(Mat6::Zero()), Mat6(C * std::nan(""))})
+    EXPECT_THROW(f.Relocate(T, bad), InputError);
+  Transform not_finite = T;
+  not_finite.translation().x() = INFINITY;
+  EXPECT_THROW(f.Relocate(not_finite, C), InputError);
+}
+
 // A gyration tensor, when given, must be symmetric positive definite; none (zero) is allowed.
 TEST(FilterOptions, AGyrationTensorMustBeSymmetricPositiveDefinite) {
   FingerScene s;

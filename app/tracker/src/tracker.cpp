@@ -65,6 +65,8 @@ struct Tracker::Impl {
     std::vector<Slot> local;
     std::vector<VisualFeature> measured;
     VisualStep step;
+    int tag_disagreements = 0;  // images in a row whose tags put the object where the estimate cannot be
+    std::vector<tracker_detail::TagCorners::PoseFit> fits;
   };
 
   Impl(const HandModel& h, const ObjectModel& o, const Modalities& m, const TrackerParams& p, const TrackerOptions& opt)
@@ -290,8 +292,41 @@ struct Tracker::Impl {
   }
 
   static void Apply(Filter& f, const VisualUpdate& u) {
+    if (u.relocate) f.Relocate(u.relocate_T_PO, u.relocate_covariance);
     if (u.widen_position > 0.0) f.WidenPose(u.widen_position, 0.0);
     f.UpdateVisual(u.features, u.T_PC, u.K);
+  }
+
+  // Whether a pose the tags fit is beyond what the estimate and the fit can both be off by: the
+  // pose difference's χ²₆ under the sum of their covariances above 99.9 %.
+  static bool Disagrees(const Filter& f, const tracker_detail::TagCorners::PoseFit& fit) {
+    Vec6 d;
+    d.head<3>() = fit.T_PO.translation() - f.position();
+    d.tail<3>() = LogSO3(fit.T_PO.linear() * f.rotation().transpose());
+    const Mat6 S = f.covariance().topLeftCorner<6, 6>() + fit.covariance;
+    return d.dot(S.ldlt().solve(d)) > 22.46;
+  }
+
+  // Whether the tags of this image put the object where the estimate cannot be; if so, `where`
+  // is the best fit. Every fit that explains the corners nearly as well as the best (χ²₂ 99 %
+  // in units of the pixel σ) counts, and one that agrees with the estimate ends it. A small tag
+  // seen at an angle fits two poses nearly alike: when neither is where the estimate is, the
+  // object is put at the better one, its covariance widened by the other's difference (d dᵀ).
+  bool TagsElsewhere(const Filter& f, const Transform& T_PC, const Intrinsics& K, tracker_detail::TagCorners::PoseFit& where) {
+    std::vector<tracker_detail::TagCorners::PoseFit>& fits = proc.fits;
+    const double sigma = params.filter.pixel_sigma;
+    proc.tags->FitPoses(proc.measured, T_PC, K, f.T_PO(), sigma, fits);
+    if (fits.empty() || fits.front().cost > sigma * sigma * static_cast<double>(proc.measured.size())) return false;
+    where = fits.front();
+    for (const auto& fit : fits) {
+      if (fit.cost > fits.front().cost + 9.21 * sigma * sigma) break;
+      if (!Disagrees(f, fit)) return false;
+      Vec6 d;
+      d.head<3>() = fit.T_PO.translation() - where.T_PO.translation();
+      d.tail<3>() = LogSO3(fit.T_PO.linear() * where.T_PO.linear().transpose());
+      where.covariance += d * d.transpose();
+    }
+    return true;
   }
 
   void Replay(Filter& f, Slot& s) {
@@ -334,6 +369,7 @@ struct Tracker::Impl {
     step.tags.clear();
     step.has_features = false;
     step.offered = step.used = 0;
+    step.relocalized = 0.0;
     double m2 = 0.0;
     std::vector<VisualUpdate> fresh;
     const auto fuse = [&](std::vector<VisualFeature>& measured, double widen_position) {
@@ -342,7 +378,7 @@ struct Tracker::Impl {
       step.offered += static_cast<int>(measured.size());
       const auto& visual = f.trace().visual;
       for (std::size_t i = visual.size() - measured.size(); i < visual.size(); ++i) m2 += visual[i].mahalanobis;
-      fresh.push_back({t_c, widen_position, measured, T_PC, K});
+      fresh.push_back({t_c, widen_position, false, Transform::Identity(), Mat6::Identity(), measured, T_PC, K});
     };
     if (proc.features) {
       proc.features->Measure(image, T_PC, K, f, step, proc.measured);
@@ -359,7 +395,19 @@ struct Tracker::Impl {
     }
     if (proc.tags) {
       proc.tags->Measure(image, T_PC, K, f.T_PO(), step.tags, proc.measured);
-      fuse(proc.measured, 0.0);
+      tracker_detail::TagCorners::PoseFit fit;
+      const bool elsewhere = params.tag_relocate_images > 0 && TagsElsewhere(f, T_PC, K, fit);
+      proc.tag_disagreements = elsewhere ? proc.tag_disagreements + 1 : 0;
+      if (elsewhere && proc.tag_disagreements >= params.tag_relocate_images) {
+        // The tags put the object where the estimate cannot be: it is put there, and the fit is
+        // this image's measurement.
+        proc.tag_disagreements = 0;
+        step.relocalized = (fit.T_PO.translation() - f.position()).norm();
+        f.Relocate(fit.T_PO, fit.covariance);
+        fresh.push_back({t_c, 0.0, true, fit.T_PO, fit.covariance, {}, T_PC, K});
+      } else {
+        fuse(proc.measured, 0.0);
+      }
     }
     step.mean_mahalanobis = step.offered > 0 ? m2 / step.offered : 0.0;
     step.t_capture = t_c;

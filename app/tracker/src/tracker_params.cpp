@@ -105,6 +105,9 @@ void TrackerParams::Validate(const std::string& source) const {
   filter.Validate(source);
   if (!(joint_limit_margin >= 0.0 && joint_limit_margin <= 100.0))
     throw InputError(source + ": parameter 'joints.limit_margin' is " + std::to_string(joint_limit_margin) + ", expected in [0, 100]");
+  if (!(tag_relocate_images >= 0 && tag_relocate_images <= 1000))
+    throw InputError(source + ": parameter 'tags.relocate_images' is " + std::to_string(tag_relocate_images) +
+                     ", expected in [0, 1000] (0: never)");
   Prefixed(source, [&] { tags.Validate(); });
   Prefixed(source, [&] { features.Validate(); });
 }
@@ -114,6 +117,7 @@ std::string TrackerParamsToJson(const TrackerParams& params) {
   Json tags = Write(params.tags, TagFields());
   if (!params.tag_family_from_object) tags["family"] = params.tags.family;
   tags["fine_search"] = params.tag_fine_search;
+  tags["relocate_images"] = params.tag_relocate_images;
   j["tags"] = tags;
   j["features"] = Write(params.features, FeatureFields());
   j["joints"] = {{"limit_margin", params.joint_limit_margin}, {"clamp_to_limits", params.joint_clamp_to_limits}};
@@ -136,6 +140,13 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
       if (!tags["fine_search"].is_boolean()) throw InputError(source + ": parameter 'tags.fine_search' must be true or false");
       p.tag_fine_search = tags["fine_search"].get<bool>();
       tags.erase("fine_search");
+    }
+    if (tags.is_object() && tags.contains("relocate_images")) {
+      const Json& v = tags["relocate_images"];
+      if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 1000)
+        throw InputError(source + ": parameter 'tags.relocate_images' is " + v.dump() + ", expected an integer in [0, 1000] (0: never)");
+      p.tag_relocate_images = v.get<int>();
+      tags.erase("relocate_images");
     }
     Read(tags, TagFields(), source + " (tags)", p.tags);
     j.erase("tags");

@@ -2,6 +2,7 @@
 // measurement sources that feed the update live in their own files (filter.hpp lists them).
 #include "inhand/filter/filter.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -134,6 +135,20 @@ void Filter::WidenPose(double sigma_position, double sigma_orientation) {
                      std::to_string(sigma_orientation) + " rad; expected finite and >= 0");
   s_.P.diagonal().head<3>().array() += sigma_position * sigma_position;
   s_.P.diagonal().segment<3>(3).array() += sigma_orientation * sigma_orientation;
+}
+
+void Filter::Relocate(const Transform& T_PO, const Mat6& pose_covariance) {
+  const Eigen::LLT<Mat6> llt(pose_covariance);
+  if (!T_PO.matrix().allFinite() || !pose_covariance.allFinite() || !pose_covariance.isApprox(pose_covariance.transpose()) ||
+      llt.info() != Eigen::Success)
+    throw InputError("filter: relocating the object needs a finite pose and a symmetric positive definite covariance");
+  s_.p = T_PO.translation();
+  s_.R = Orthonormalize(T_PO.linear());
+  delta_.setZero();
+  s_.P.topRows<6>().setZero();
+  s_.P.leftCols<6>().setZero();
+  s_.P.topLeftCorner<6, 6>() = 0.5 * (pose_covariance + pose_covariance.transpose());
+  s_.active.clear();
 }
 
 Transform Filter::T_PO() const { return MakeTransform(s_.p, s_.R); }

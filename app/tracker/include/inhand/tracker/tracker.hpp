@@ -85,7 +85,9 @@ struct VisualStep {
                                    // uncertain; beyond FeatureParams::search_radius, match.debug
                                    // has the global shift)
   double relocalized = 0.0;        // [m] the object, lost for frames, was found this far from
-                                   // the estimate: the σ added to its position before the update
+                                   // the estimate. Extracted features: the σ added to its
+                                   // position before the update; tags: the fit of the tags'
+                                   // corners that the object was put at (VisualUpdate::relocate)
   std::vector<int> used_match;     // index into match.matches
   std::vector<double> residual_before, residual_after;  // [px]
 };
@@ -95,6 +97,12 @@ struct VisualStep {
 struct VisualUpdate {
   double t_capture = 0.0;
   double widen_position = 0.0;  // [m] σ added to the position before the update (relocalized)
+  // Tags that disagreed with the estimate in TrackerParams::tag_relocate_images images in a row:
+  // the object is put where their fit says (Filter::Relocate), and that fit is this image's
+  // measurement (`features` stays empty: the same corners are not counted twice).
+  bool relocate = false;
+  Transform relocate_T_PO = Transform::Identity();
+  Mat6 relocate_covariance = Mat6::Identity();
   std::vector<VisualFeature> features;
   Transform T_PC = Transform::Identity();
   Intrinsics K;

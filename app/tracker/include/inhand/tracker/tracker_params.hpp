@@ -18,6 +18,12 @@ struct TrackerParams {
   bool tag_family_from_object = true;  // the file names one (tag_family_from_object false)
   bool tag_fine_search = true;     // search tags the decimated detection missed at full
                                    // resolution where the estimate expects them
+  // Tags whose own fit of the object's pose (every corner of the image, Gauss-Newton from each
+  // tag's homography) the estimate cannot explain (χ²₆ > 99.9 % under both covariances) in this
+  // many images in a row put the object where the fit says, instead of being gated corner by
+  // corner while the estimate stays where the object is not (a bottle fallen out of a loosened
+  // grip; a start far off). 0: never. JSON: "tags": {"relocate_images"}.
+  int tag_relocate_images = 2;
   FeatureParams features;
   // Joint samples that no hand can produce are dropped (counted), never fused: a value that is
   // not a number, or beyond its URDF limits by more than this (rad or m; joints without limits:

@@ -139,6 +139,13 @@ class Filter {
   // tracker: the object found again far from where the estimate had lost it). Throws
   // InputError unless both are finite and >= 0.
   void WidenPose(double sigma_position, double sigma_orientation);
+  // Puts the object at T_PO with covariance `pose_covariance` of (δp, δθ): what the caller
+  // measured on its own, far from where the estimate was (the tracker: tags that a fit puts
+  // where the estimate cannot be). The pose forgets its correlations with the biases and the
+  // camera error, which keep their own; the contacts that moved the object with the fingers are
+  // dropped (they held the object where it was not). Throws InputError unless the pose is
+  // finite and the covariance symmetric positive definite.
+  void Relocate(const Transform& T_PO, const Mat6& pose_covariance);
 
   Transform T_PO() const;
   const Vec3& position() const { return s_.p; }
