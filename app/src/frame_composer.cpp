@@ -42,6 +42,10 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
     set.position_covariance = f.covariance().topLeftCorner<3, 3>();
     set.contacts = f.trace().contacts;
     set.visual = f.trace().visual;
+    set.slipping = f.trace().slipping;
+    const TrackerStats stats = p.tracker(i).stats();
+    if (stats.relocalizations > 0 && stats.last_relocalization_t <= t && t - stats.last_relocalization_t <= 1.0)
+      set.found_again = stats.last_relocalized;
     st.sets.push_back(std::move(set));
   }
   const std::size_t last = p.sets().size() - 1;
@@ -70,6 +74,8 @@ void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const
     if (std::isfinite(r.position_error))
       line << r.position_error * 1000 << " mm / " << r.orientation_error * 180 / M_PI << " deg, ";
     line << r.constraints << " constraints";
+    if (set.found_again > 0.0) line << ", found again " << set.found_again * 1000 << " mm away";
+    if (set.slipping) line << ", grip loosened";
     of->hud.push_back(line.str());
   }
 }

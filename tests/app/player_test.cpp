@@ -2,6 +2,7 @@
 
 #include <fstream>
 
+#include "inhand/app/frame_composer.hpp"
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/sessions/session.hpp"
@@ -96,6 +97,60 @@ TEST(Modalities, EveryCombinationParsesToOneNameAndColour) {
   EXPECT_EQ(app::DefaultModalities(true, true, true), "j,jt,jta,jtf");
   EXPECT_EQ(app::DefaultModalities(false, true, true), "j,ja,jf");
   EXPECT_EQ(app::DefaultModalities(false, false, true), "j");
+}
+
+// What the pictures say beside the numbers: a session whose start is 120° and 30 mm off and
+// claims σ 2 mm / 1° (written again with that start). jta's tags find the object again once, and
+// for the second after that image its HUD line says how far away; jt never finds it. A set's
+// `slipping` is its filter's (the grip loosened): the ketchup scenario loosens it at 4.5 s.
+TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) {
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "session")).exit_code, 0);
+  const Session sim = Session::Load(dir / "session");
+  SessionInfo info = sim.info();
+  info.hand_urdf = sim.Resolve(info.hand_urdf);
+  info.object = sim.Resolve(info.object);
+  for (auto& [name, path] : info.packages) path = sim.Resolve(path);
+  info.initial_T_PO.linear() = ExpSO3(Vec3(0.0, 0.0, 120.0 * M_PI / 180)) * info.initial_T_PO.linear();
+  info.initial_T_PO.translation() += 0.03 * sim.camera_frames()[0].T_PC.linear().col(0);
+  info.sigma_position = 0.002;
+  info.sigma_orientation = 1.0 * M_PI / 180;
+  {
+    SessionWriter w(dir / "lost", info, sim.joint_names(), false, true);
+    for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(sim.t(k), sim.q(k), sim.tau(k));
+    for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
+      w.AddCameraFrame(sim.camera_frames()[i].t, sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
+    for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(g.t, g.T_PO);
+    w.Commit();
+  }
+  const Session lost = Session::Load(dir / "lost");
+  SessionPlayer player(lost, TrackerParams(), app::ParseModalities("jt,jta"));
+  std::vector<int> found_samples(2, 0), slipping_samples(2, 0);
+  double found_at = -1.0;
+  for (int k = 0; k < lost.num_samples(); ++k) {
+    player.Step(k);
+    const double t = lost.t(k);
+    const app::PictureState st = app::FrameComposer::Capture(player, -1, t);
+    ASSERT_EQ(st.sets.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(st.sets[i].slipping, player.tracker(i).filter().trace().slipping);
+      slipping_samples[i] += st.sets[i].slipping;
+      if (st.sets[i].found_again > 0.0) {
+        ++found_samples[i];
+        const TrackerStats stats = player.tracker(i).stats();
+        EXPECT_EQ(stats.relocalizations, 1);
+        EXPECT_EQ(st.sets[i].found_again, stats.last_relocalized);
+        EXPECT_LE(t - stats.last_relocalization_t, 1.0);
+        found_at = stats.last_relocalization_t;
+      }
+    }
+  }
+  EXPECT_EQ(found_samples[0], 0);
+  EXPECT_GT(found_at, 0.0);
+  EXPECT_GE(found_samples[1], 400);  // the second after it at 500 Hz, give or take the last image's lag
+  EXPECT_LE(found_samples[1], 501);
+  EXPECT_GT(player.tracker(1).stats().last_relocalized, 0.02);
+  EXPECT_GT(slipping_samples[0], 0);
 }
 
 // A hand without torque sensors: the same recording with its tau: columns removed replays j

@@ -434,7 +434,11 @@ struct Tracker::Impl {
         s.fused = mine.fused;
       }
       ++stats.images_fused;
-      if (step.relocalized > 0.0) ++stats.relocalizations;
+      if (step.relocalized > 0.0) {
+        ++stats.relocalizations;
+        stats.last_relocalization_t = t_c;
+        stats.last_relocalized = step.relocalized;
+      }
       if (upto > a) ++stats.rewinds, stats.samples_replayed += upto - a;
       step.sequence = ++sequence;
       if (options.threaded) {

@@ -65,6 +65,8 @@ struct TrackerStats {
   long rewinds = 0;                // images fused before joint samples already fused
   long samples_replayed = 0;       // joint samples re-applied after them
   long relocalizations = 0;        // images that found a lost object again (VisualStep::relocalized)
+  double last_relocalization_t = 0.0;  // [s] the last one's capture time (when relocalizations > 0)
+  double last_relocalized = 0.0;       // [m] and how far from the estimate it found the object
 };
 
 // What the last fused image showed and did, for overlays, the GUI and `inhand match`.
