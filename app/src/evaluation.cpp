@@ -9,9 +9,7 @@ void CompareWithTruth(const Transform& gt, const Mat6& P, EstimateRecord& r) {
   r.orientation_error = RotationDistance(r.T_PO.linear(), gt.linear());
   r.position_error_O = gt.linear().transpose() * (r.T_PO.translation() - gt.translation());
   r.orientation_error_O = LogSO3(gt.linear().transpose() * r.T_PO.linear());
-  Vec6 e;
-  e.head<3>() = gt.translation() - r.T_PO.translation();
-  e.tail<3>() = LogSO3(gt.linear() * r.T_PO.linear().transpose());
+  const Vec6 e = PoseError(gt, r.T_PO);
   r.nees = e.dot(P.ldlt().solve(e));
 }
 

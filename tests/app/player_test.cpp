@@ -99,6 +99,20 @@ TEST(Modalities, EveryCombinationParsesToOneNameAndColour) {
   EXPECT_EQ(app::DefaultModalities(false, false, true), "j");
 }
 
+// The recording `sim` written again to `out` through the session writer, with `info` (its models'
+// paths made absolute, so they stay where the simulator put them) and with or without torques.
+void WriteCopy(const Session& sim, SessionInfo info, const std::string& out, bool torques) {
+  info.hand_urdf = sim.Resolve(info.hand_urdf);
+  info.object = sim.Resolve(info.object);
+  for (auto& [name, path] : info.packages) path = sim.Resolve(path);
+  SessionWriter w(out, info, sim.joint_names(), false, torques);
+  for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(sim.t(k), sim.q(k), torques ? Eigen::VectorXd(sim.tau(k)) : Eigen::VectorXd());
+  for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
+    w.AddCameraFrame(sim.camera_frames()[i].t, sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
+  for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(g.t, g.T_PO);
+  w.Commit();
+}
+
 // What the pictures say beside the numbers: a session whose start is 120° and 30 mm off and
 // claims σ 2 mm / 1° (written again with that start). jta's tags find the object again once, and
 // for the second after that image its HUD line says how far away; jt never finds it. A set's
@@ -108,21 +122,11 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
   ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "session")).exit_code, 0);
   const Session sim = Session::Load(dir / "session");
   SessionInfo info = sim.info();
-  info.hand_urdf = sim.Resolve(info.hand_urdf);
-  info.object = sim.Resolve(info.object);
-  for (auto& [name, path] : info.packages) path = sim.Resolve(path);
   info.initial_T_PO.linear() = ExpSO3(Vec3(0.0, 0.0, 120.0 * M_PI / 180)) * info.initial_T_PO.linear();
   info.initial_T_PO.translation() += 0.03 * sim.camera_frames()[0].T_PC.linear().col(0);
   info.sigma_position = 0.002;
   info.sigma_orientation = 1.0 * M_PI / 180;
-  {
-    SessionWriter w(dir / "lost", info, sim.joint_names(), false, true);
-    for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(sim.t(k), sim.q(k), sim.tau(k));
-    for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
-      w.AddCameraFrame(sim.camera_frames()[i].t, sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
-    for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(g.t, g.T_PO);
-    w.Commit();
-  }
+  WriteCopy(sim, info, dir / "lost", true);
   const Session lost = Session::Load(dir / "lost");
   SessionPlayer player(lost, TrackerParams(), app::ParseModalities("jt,jta"));
   std::vector<int> found_samples(2, 0), slipping_samples(2, 0);
@@ -161,18 +165,7 @@ TEST(SessionPlayer, TorqueFreeSessionRunsJointsTagsAndFeatures) {
   const Session sim = Session::Load(dir / "session");
   // Two copies through the same writer (a session.json round trip rounds the initial pose),
   // with and without the torque columns.
-  for (const bool torques : {true, false}) {
-    SessionInfo info = sim.info();  // the models stay where the simulator put them
-    info.hand_urdf = sim.Resolve(info.hand_urdf);
-    info.object = sim.Resolve(info.object);
-    for (auto& [name, path] : info.packages) path = sim.Resolve(path);
-    SessionWriter w(dir / (torques ? "with_tau" : "no_tau"), info, sim.joint_names(), false, torques);
-    for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(sim.t(k), sim.q(k), torques ? Eigen::VectorXd(sim.tau(k)) : Eigen::VectorXd());
-    for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
-      w.AddCameraFrame(sim.camera_frames()[i].t, sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
-    for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(g.t, g.T_PO);
-    w.Commit();
-  }
+  for (const bool torques : {true, false}) WriteCopy(sim, sim.info(), dir / (torques ? "with_tau" : "no_tau"), torques);
   const Session full = Session::Load(dir / "with_tau");
   const Session bare = Session::Load(dir / "no_tau");
   EXPECT_TRUE(full.has_torques());

@@ -717,6 +717,16 @@ TEST(Filter, WidenPoseAddsToThePoseVarianceOnly) {
     EXPECT_THROW(f.WidenPose(sp, so), InputError);
 }
 
+// PoseError(a, b) is the error state that takes b to a: a = (p_b + δp, Exp(δθ) R_b).
+TEST(FilterJacobians, PoseErrorIsTheErrorStateBetweenTwoPoses) {
+  const Transform b = MakeTransform(Vec3(0.01, -0.02, 0.05), ExpSO3(Vec3(0.4, -1.2, 2.0)));
+  for (const Vec6& d : {Vec6((Vec6() << 0.003, -0.01, 0.02, 0.1, -0.3, 0.2).finished()), Vec6(Vec6::Zero()),
+                        Vec6((Vec6() << 0.0, 0.0, 0.0, 0.0, 3.0, 0.0).finished())}) {
+    const Transform a = MakeTransform(b.translation() + d.head<3>(), ExpSO3(d.tail<3>()) * b.linear());
+    EXPECT_LT((PoseError(a, b) - d).norm(), 1e-12) << d.transpose();
+  }
+}
+
 // Relocate puts the object at the given pose with the given covariance; the pose forgets its
 // correlations, the biases keep their own variance; the contacts that moved the object with the
 // fingers are dropped (the next Predict leaves it where it was put). A covariance that is not

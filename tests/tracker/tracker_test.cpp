@@ -185,8 +185,9 @@ TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
 // 1°: every tag corner is gated, and the tags' own fit puts the object where the estimate cannot
 // be. After tag_relocate_images (2) such images the object is put there: the tags then fuse, and
 // jta ends as close to the truth as from the session's start (9.4 mm / 2.9° there; within 2 mm /
-// 1° of it, and 12 mm / 4°). With relocation off it stays lost. Delivered 120 ms late (every image fused on a rewound filter, its relocation
-// re-applied on each later rewind), the estimate is the in-order one.
+// 1° of it, and 12 mm / 4°). With relocation off it stays lost. Delivered 120 ms late (every
+// image fused on a rewound filter, its relocation re-applied on each later rewind), the estimate
+// is the in-order one.
 TEST(Tracker, TagsSeenWhereTheEstimateCannotBeMoveTheEstimateThere) {
   const Recording& r = Recording::Get();
   const int n = std::min(r.session.num_samples(), 1500);  // 3 s, 15 frames with the tag in view
@@ -196,7 +197,6 @@ TEST(Tracker, TagsSeenWhereTheEstimateCannotBeMoveTheEstimateThere) {
   start.translation() += 0.03 * r.session.camera_frames()[0].T_PC.linear().col(0);
   const StartSigmas sigmas{0.002, 1.0 * M_PI / 180, info.sigma_joint_bias, {}};
   const Transform truth = r.session.GroundTruthAt(r.session.t(n - 1));
-  std::map<int, Transform> end;
   for (const int relocate_images : {0, 2}) {
     TrackerParams params;
     params.tag_relocate_images = relocate_images;
@@ -208,7 +208,6 @@ TEST(Tracker, TagsSeenWhereTheEstimateCannotBeMoveTheEstimateThere) {
       relocalized = std::max(relocalized, tracker.last_visual().relocalized);
       if (first < 0 && tracker.stats().relocalizations > 0) first = static_cast<int>(tracker.stats().images_fused);
     });
-    end[relocate_images] = tracker.T_PO();
     SCOPED_TRACE("relocate_images " + std::to_string(relocate_images));
     EXPECT_EQ(tracker.stats().relocalizations, relocate_images == 0 ? 0 : 1);  // once found, not lost again
     if (relocate_images > 0) {

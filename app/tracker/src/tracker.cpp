@@ -300,9 +300,7 @@ struct Tracker::Impl {
   // Whether a pose the tags fit is beyond what the estimate and the fit can both be off by: the
   // pose difference's χ²₆ under the sum of their covariances above 99.9 %.
   static bool Disagrees(const Filter& f, const tracker_detail::TagCorners::PoseFit& fit) {
-    Vec6 d;
-    d.head<3>() = fit.T_PO.translation() - f.position();
-    d.tail<3>() = LogSO3(fit.T_PO.linear() * f.rotation().transpose());
+    const Vec6 d = PoseError(fit.T_PO, f.T_PO());
     const Mat6 S = f.covariance().topLeftCorner<6, 6>() + fit.covariance;
     return d.dot(S.ldlt().solve(d)) > 22.46;
   }
@@ -321,9 +319,7 @@ struct Tracker::Impl {
     for (const auto& fit : fits) {
       if (fit.cost > fits.front().cost + 9.21 * sigma * sigma) break;
       if (!Disagrees(f, fit)) return false;
-      Vec6 d;
-      d.head<3>() = fit.T_PO.translation() - where.T_PO.translation();
-      d.tail<3>() = LogSO3(fit.T_PO.linear() * where.T_PO.linear().transpose());
+      const Vec6 d = PoseError(fit.T_PO, where.T_PO);
       where.covariance += d * d.transpose();
     }
     return true;

@@ -4,6 +4,13 @@
 
 namespace inhand {
 
+Vec6 PoseError(const Transform& a, const Transform& b) {
+  Vec6 e;
+  e.head<3>() = a.translation() - b.translation();
+  e.tail<3>() = LogSO3(a.linear() * b.linear().transpose());
+  return e;
+}
+
 Mat36 GraspMapBlock(const Vec3& c_P, const Vec3& p_PO) {
   Mat36 A;
   A.leftCols<3>().setIdentity();

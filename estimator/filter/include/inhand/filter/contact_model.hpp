@@ -9,6 +9,9 @@ using Mat36 = Eigen::Matrix<double, 3, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 
+// Pose a minus pose b in the filter's error state (δp, δθ), a = (p_b + δp, Exp(δθ) R_b).
+Vec6 PoseError(const Transform& a, const Transform& b);
+
 // A_i = G_iᵀ = [ I₃ , -[c - p]x ]: object twist (v, ω) → velocity of the object point c.
 Mat36 GraspMapBlock(const Vec3& c_P, const Vec3& p_PO);
 
