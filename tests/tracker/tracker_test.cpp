@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -15,6 +16,12 @@
 #include "test_support.hpp"
 
 namespace inhand {
+
+void PrintTo(const VisualMemory& m, std::ostream* os) {
+  *os << "{tag_disagreements " << m.tag_disagreements << ", features_matched_well " << m.features_matched_well
+      << ", features_poor_frames " << m.features_poor_frames << "}";
+}
+
 namespace {
 
 // One simulated session (ketchup bottle with its tag, paper noise), read once for every test.
@@ -60,13 +67,15 @@ std::unique_ptr<Tracker> Make(const Recording& r, const std::string& set, Tracke
   return tracker;
 }
 
-// Feeds samples [0, n) and every `stride`-th camera frame once the joint samples have reached
-// its capture time plus `delay`; `each` sees the tracker after every sample.
+// Feeds samples [from, n) and every `stride`-th camera frame once the joint samples have reached
+// its capture time plus `delay` (frames reached before `from` are not fed again); `each` sees the
+// tracker after every sample.
 template <typename Each>
-void Feed(const Recording& r, Tracker& tracker, int n, double delay, Each&& each, std::size_t stride = 1) {
+void Feed(const Recording& r, Tracker& tracker, int n, double delay, Each&& each, std::size_t stride = 1, int from = 0) {
   const auto& frames = r.session.camera_frames();
   std::size_t next = 0;
-  for (int k = 0; k < n; ++k) {
+  while (from > 0 && next < frames.size() && frames[next].t + delay <= r.session.t(from - 1) + 1e-9) next += stride;
+  for (int k = from; k < n; ++k) {
     const double t = r.session.t(k);
     tracker.AddJointSample(t, r.q[static_cast<std::size_t>(k)], r.tau[static_cast<std::size_t>(k)]);
     while (next < frames.size() && frames[next].t + delay <= t + 1e-9) {
@@ -228,6 +237,59 @@ TEST(Tracker, TagsSeenWhereTheEstimateCannotBeMoveTheEstimateThere) {
       EXPECT_LE(PoseDifference(late->T_PO(), tracker.T_PO()), 1e-9);
     } else {
       EXPECT_GT(RotationDistance(tracker.T_PO().linear(), truth.linear()), 60.0 * M_PI / 180);
+    }
+  }
+}
+
+// A snapshot holds what the visual step carries from one image to the next (VisualMemory). Two
+// runs that depend on it: jta started 120° off, whose tags disagree with the estimate on its 1st
+// image and relocate the object on its 2nd, and jtf started 30 mm beside the object with σ 2 mm,
+// whose features match poorly for frames until the object is searched for again. Restored after
+// the whole run to a snapshot taken before the first sample, or after the first image whose memory
+// differs from the end's, and continued from there, each run is the uninterrupted one bit for bit
+// (before snapshots held the memory, jta relocated an image late and jtf searched locally first).
+TEST(Tracker, ASnapshotContinuesBitIdentically) {
+  const Recording& r = Recording::Get();
+  const int n = std::min(r.session.num_samples(), 1500);  // 3 s, 15 frames
+  const SessionInfo& info = r.session.info();
+  const StartSigmas sigmas{0.002, 1.0 * M_PI / 180, info.sigma_joint_bias, {}};
+  for (const std::string set : {"jta", "jtf"}) {
+    SCOPED_TRACE(set);
+    Transform start = info.initial_T_PO;
+    if (set == "jta") start.linear() = ExpSO3(Vec3(0.0, 0.0, 120.0 * M_PI / 180)) * start.linear();
+    start.translation() += 0.03 * r.session.camera_frames()[0].T_PC.linear().col(0);
+    Tracker tracker(r.models.hand, r.models.object, Set(set), TrackerParams());
+    tracker.Start(r.session.t(0), start, sigmas);
+    std::vector<Transform> run;
+    std::vector<std::pair<int, TrackerSnapshot>> snapshots = {{-1, tracker.Save()}};  // after sample k
+    long fused = 0;
+    Feed(r, tracker, n, 0.0, [&](int k) {
+      run.push_back(tracker.T_PO());
+      if (tracker.stats().images_fused > fused) snapshots.emplace_back(k, tracker.Save());
+      fused = tracker.stats().images_fused;
+    });
+    const Eigen::MatrixXd P = tracker.covariance();
+    const VisualMemory end = tracker.visual_memory();
+    EXPECT_EQ(tracker.stats().relocalizations, 1);
+    ASSERT_FALSE(snapshots[0].second.memory.features_matched_well);
+    const auto differs = std::find_if(snapshots.begin() + 1, snapshots.end(), [&](const auto& s) { return !(s.second.memory == end); });
+    ASSERT_NE(differs, snapshots.end());
+    if (set == "jta") {
+      EXPECT_EQ(differs->second.memory.tag_disagreements, 1);
+    } else {
+      EXPECT_TRUE(end.features_matched_well);
+    }
+    for (const auto* snapshot : {&snapshots[0], &*differs}) {
+      tracker.Restore(snapshot->second);
+      EXPECT_EQ(tracker.visual_memory(), snapshot->second.memory);
+      int different = 0;
+      Feed(r, tracker, n, 0.0, [&](int k) { different += tracker.T_PO().matrix() != run[static_cast<std::size_t>(k)].matrix(); }, 1,
+           snapshot->first + 1);
+      SCOPED_TRACE("from sample " + std::to_string(snapshot->first));
+      EXPECT_EQ(different, 0);
+      EXPECT_EQ(tracker.covariance(), P);
+      EXPECT_EQ(tracker.visual_memory(), end);
+      EXPECT_EQ(tracker.stats().relocalizations, 1);
     }
   }
 }

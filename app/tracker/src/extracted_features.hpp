@@ -22,6 +22,10 @@ class ExtractedFeatures {
   void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
                VisualStep& step, std::vector<VisualFeature>& out);
   void Fused(int used);
+  // What Measure carries from one frame to the next (VisualMemory), to save and to set back.
+  bool matched_well() const { return matched_well_; }
+  int poor_frames() const { return poor_frames_; }
+  void Recall(bool matched_well, int poor_frames) { matched_well_ = matched_well, poor_frames_ = poor_frames; }
 
  private:
   const HandModel& hand_;

@@ -67,6 +67,17 @@ struct Tracker::Impl {
     VisualStep step;
     int tag_disagreements = 0;  // images in a row whose tags put the object where the estimate cannot be
     std::vector<tracker_detail::TagCorners::PoseFit> fits;
+
+    VisualMemory Memory() const {
+      VisualMemory m;
+      m.tag_disagreements = tag_disagreements;
+      if (features) m.features_matched_well = features->matched_well(), m.features_poor_frames = features->poor_frames();
+      return m;
+    }
+    void Recall(const VisualMemory& m) {
+      tag_disagreements = m.tag_disagreements;
+      if (features) features->Recall(m.features_matched_well, m.features_poor_frames);
+    }
   };
 
   Impl(const HandModel& h, const ObjectModel& o, const Modalities& m, const TrackerParams& p, const TrackerOptions& opt)
@@ -241,7 +252,16 @@ struct Tracker::Impl {
   void AdoptLocked() {
     filter.Restore(adopt_state);
     std::swap(last_visual, adopt_visual);
+    memory = adopt_memory;
     adopt_pending = false;
+  }
+
+  // Under the lock, with the worker idle (WaitForImages, the queue emptied): the visual step
+  // continues with `m`.
+  void RecallLocked(const VisualMemory& m, long images_fused) {
+    memory = m;
+    proc.Recall(m);
+    sequence = images_fused;
   }
 
   void WaitForImages() {
@@ -440,9 +460,11 @@ struct Tracker::Impl {
       if (options.threaded) {
         adopt_state = f.state();
         std::swap(adopt_visual, step);
+        adopt_memory = proc.Memory();
         adopt_pending = true;
       } else {
         std::swap(last_visual, step);
+        memory = proc.Memory();
       }
       return;
     }
@@ -456,6 +478,7 @@ struct Tracker::Impl {
   BulletContactQuery query;
   Filter filter;  // the caller's
   VisualStep last_visual;
+  VisualMemory memory;  // after last_visual
 
   bool start_set = false, started = false;
   double start_t = 0.0, last_t = 0.0;
@@ -476,6 +499,7 @@ struct Tracker::Impl {
   bool adopt_pending = false;
   FilterState adopt_state;
   VisualStep adopt_visual;
+  VisualMemory adopt_memory;
   std::exception_ptr worker_error;
   std::condition_variable work_cv, idle_cv;
   std::thread worker;
@@ -503,6 +527,8 @@ void Tracker::Start(double t, const Transform& T_PO, const StartSigmas& sigmas) 
   m.early.clear();
   m.queue.clear();
   m.adopt_pending = false;
+  m.last_visual = VisualStep();
+  m.RecallLocked(VisualMemory(), 0);
 }
 
 void Tracker::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& tau) {
@@ -524,6 +550,10 @@ const Eigen::VectorXd& Tracker::joints() const { return impl_->q_used; }
 const FilterTrace& Tracker::trace() const { return impl_->filter.trace(); }
 const Filter& Tracker::filter() const { return impl_->filter; }
 const VisualStep& Tracker::last_visual() const { return impl_->last_visual; }
+VisualMemory Tracker::visual_memory() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->memory;
+}
 const Modalities& Tracker::modalities() const { return impl_->modalities; }
 const TrackerParams& Tracker::params() const { return impl_->params; }
 
@@ -540,6 +570,7 @@ TrackerSnapshot Tracker::Save() const {
   s.t = m.last_t;
   s.filter = m.filter.state();
   s.visual = m.last_visual;
+  s.memory = m.memory;
   s.stats = m.stats;
   if (m.last >= m.first) s.last = m.At(m.last);
   return s;
@@ -557,6 +588,7 @@ void Tracker::Restore(const TrackerSnapshot& s) {
   m.last_t = s.t;
   m.stats = s.stats;
   m.last_visual = s.visual;
+  m.RecallLocked(s.memory, s.visual.sequence);
   m.first = 0;
   m.last = -1;
   if (!s.started) return;

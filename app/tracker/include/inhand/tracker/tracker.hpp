@@ -119,6 +119,19 @@ struct TrackedSample {
   std::vector<VisualUpdate> fused;
 };
 
+// What the visual step carries from one image to the next; a snapshot must hold it, or a run
+// continued from the snapshot measures its next images otherwise than the uninterrupted run.
+struct VisualMemory {
+  int tag_disagreements = 0;           // images in a row whose tags put the object where the
+                                       // estimate cannot be (TrackerParams::tag_relocate_images)
+  bool features_matched_well = false;  // a frame has matched well: the wide first search is over
+  int features_poor_frames = 0;        // frames in a row since that fused few features (lost)
+  bool operator==(const VisualMemory& o) const {
+    return tag_disagreements == o.tag_disagreements && features_matched_well == o.features_matched_well &&
+           features_poor_frames == o.features_poor_frames;
+  }
+};
+
 // A tracker's state at one joint sample, to continue from later (the GUI seeks with these).
 struct TrackerSnapshot {
   bool started = false;
@@ -126,6 +139,7 @@ struct TrackerSnapshot {
   TrackedSample last;      // the newest sample
   FilterState filter;      // after it and its visual updates
   VisualStep visual;
+  VisualMemory memory;     // after its visual updates
   TrackerStats stats;
 };
 
@@ -138,7 +152,8 @@ class Tracker {
   Tracker& operator=(const Tracker&) = delete;
 
   // The estimate to start from and its uncertainty; the first joint sample at or after t starts
-  // the filter there (earlier samples are dropped). Starting again discards the history.
+  // the filter there (earlier samples are dropped). Starting again discards the history and what
+  // the visual step remembered (the next image is searched for as the first was).
   void Start(double t, const Transform& T_PO, const StartSigmas& sigmas = {});
   // A joint sample: positions and external torques (zeros without torque sensing), in the
   // hand's configuration order. Samples not later than the previous one are dropped (counted).
@@ -164,6 +179,7 @@ class Tracker {
   const FilterTrace& trace() const;    // of the newest joint sample (and images fused at it)
   const Filter& filter() const;
   const VisualStep& last_visual() const;
+  VisualMemory visual_memory() const;  // after last_visual()
   TrackerStats stats() const;
   const Modalities& modalities() const;
   const TrackerParams& params() const;
