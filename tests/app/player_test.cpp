@@ -114,9 +114,10 @@ void WriteCopy(const Session& sim, SessionInfo info, const std::string& out, boo
 }
 
 // What the pictures say beside the numbers: a session whose start is 120° and 30 mm off and
-// claims σ 2 mm / 1° (written again with that start). jta's tags find the object again once, and
-// for the second after that image its HUD line says how far away; jt never finds it. A set's
-// `slipping` is its filter's (the grip loosened): the ketchup scenario loosens it at 4.5 s.
+// claims σ 2 mm / 1° (written again with that start). jta's tags see the object elsewhere on the
+// first image (its HUD says so until the next image), find it there on the second, and for the
+// second after that image its HUD line says how far away; jt never finds it. A set's `slipping`
+// is its filter's (the grip loosened): the ketchup scenario loosens it at 4.5 s.
 TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) {
   test::TempDir dir;
   ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "session")).exit_code, 0);
@@ -129,7 +130,7 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
   WriteCopy(sim, info, dir / "lost", true);
   const Session lost = Session::Load(dir / "lost");
   SessionPlayer player(lost, TrackerParams(), app::ParseModalities("jt,jta"));
-  std::vector<int> found_samples(2, 0), slipping_samples(2, 0);
+  std::vector<int> found_samples(2, 0), slipping_samples(2, 0), elsewhere_samples(2, 0);
   double found_at = -1.0;
   for (int k = 0; k < lost.num_samples(); ++k) {
     player.Step(k);
@@ -138,6 +139,9 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
     ASSERT_EQ(st.sets.size(), 2u);
     for (std::size_t i = 0; i < 2; ++i) {
       EXPECT_EQ(st.sets[i].slipping, player.tracker(i).filter().trace().slipping);
+      EXPECT_EQ(st.sets[i].memory, player.tracker(i).visual_memory());
+      elsewhere_samples[i] += st.sets[i].memory.tag_disagreements > 0;
+      EXPECT_FALSE(st.sets[i].memory.features_lost());
       slipping_samples[i] += st.sets[i].slipping;
       if (st.sets[i].found_again > 0.0) {
         ++found_samples[i];
@@ -155,6 +159,8 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
   EXPECT_LE(found_samples[1], 501);
   EXPECT_GT(player.tracker(1).stats().last_relocalized, 0.02);
   EXPECT_GT(slipping_samples[0], 0);
+  EXPECT_EQ(elsewhere_samples[0], 0);
+  EXPECT_EQ(elsewhere_samples[1], 50);  // from the first image to the second, at 10 Hz
 }
 
 // A hand without torque sensors: the same recording with its tau: columns removed replays j

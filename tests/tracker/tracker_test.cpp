@@ -17,11 +17,6 @@
 
 namespace inhand {
 
-void PrintTo(const VisualMemory& m, std::ostream* os) {
-  *os << "{tag_disagreements " << m.tag_disagreements << ", features_matched_well " << m.features_matched_well
-      << ", features_poor_frames " << m.features_poor_frames << "}";
-}
-
 namespace {
 
 // One simulated session (ketchup bottle with its tag, paper noise), read once for every test.

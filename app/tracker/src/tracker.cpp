@@ -16,6 +16,7 @@
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <ostream>
 #include <sstream>
 #include <thread>
 #include <utility>
@@ -560,6 +561,11 @@ const TrackerParams& Tracker::params() const { return impl_->params; }
 TrackerStats Tracker::stats() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->stats;
+}
+
+std::ostream& operator<<(std::ostream& os, const VisualMemory& m) {
+  return os << "{tag_disagreements " << m.tag_disagreements << ", features_matched_well " << m.features_matched_well
+            << ", features_poor_frames " << m.features_poor_frames << "}";
 }
 
 TrackerSnapshot Tracker::Save() const {

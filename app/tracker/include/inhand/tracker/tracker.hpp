@@ -20,6 +20,7 @@
 // estimates when images are added in capture order.
 //
 // Not thread-safe itself: call it from one thread. The hand and object must outlive it.
+#include <iosfwd>
 #include <memory>
 #include <string>
 #include <vector>
@@ -125,12 +126,18 @@ struct VisualMemory {
   int tag_disagreements = 0;           // images in a row whose tags put the object where the
                                        // estimate cannot be (TrackerParams::tag_relocate_images)
   bool features_matched_well = false;  // a frame has matched well: the wide first search is over
-  int features_poor_frames = 0;        // frames in a row since that fused few features (lost)
+  int features_poor_frames = 0;        // frames in a row since that fused few features
+  // Frames in a row that fused fewer than kWellMatched features, after a frame had matched well,
+  // after which the object is taken as lost and searched for as at the start.
+  static constexpr int kWellMatched = 8;
+  static constexpr int kLostFrames = 3;
+  bool features_lost() const { return features_matched_well && features_poor_frames >= kLostFrames; }
   bool operator==(const VisualMemory& o) const {
     return tag_disagreements == o.tag_disagreements && features_matched_well == o.features_matched_well &&
            features_poor_frames == o.features_poor_frames;
   }
 };
+std::ostream& operator<<(std::ostream& os, const VisualMemory& m);
 
 // A tracker's state at one joint sample, to continue from later (the GUI seeks with these).
 struct TrackerSnapshot {
