@@ -44,9 +44,10 @@ class ExtractedFeatures {
                const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const;
   static bool OnOutline(const RenderOutput& view, int x, int y);
   static constexpr int kOutlinePixels = 2;  // a corner this close to the background is on the outline
-  static constexpr int kWellMatched = VisualMemory::kWellMatched;  // inliers on the object that end the wide first search
-  static constexpr int kLostFrames = VisualMemory::kLostFrames;    // frames in a row that fused fewer, after which the
-                                                                   // object is searched for once more as at the start
+  static constexpr int kWellMatched = VisualMemory::kWellMatched;  // inliers on the object that
+                                                                   // end the wide first search
+  static constexpr int kLostFrames = VisualMemory::kLostFrames;    // frames in a row that fused
+                                                                   // fewer: lost, searched for again
   bool matched_well_ = false;
   int poor_frames_ = 0;  // frames in a row that fused fewer than kWellMatched features
 };

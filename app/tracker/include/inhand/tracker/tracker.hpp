@@ -127,8 +127,8 @@ struct VisualMemory {
                                        // estimate cannot be (TrackerParams::tag_relocate_images)
   bool features_matched_well = false;  // a frame has matched well: the wide first search is over
   int features_poor_frames = 0;        // frames in a row since that fused few features
-  // Frames in a row that fused fewer than kWellMatched features, after a frame had matched well,
-  // after which the object is taken as lost and searched for as at the start.
+  // The features are lost after kLostFrames frames in a row that fused fewer than kWellMatched
+  // features, once a frame had matched well; the object is then searched for as at the start.
   static constexpr int kWellMatched = 8;
   static constexpr int kLostFrames = 3;
   bool features_lost() const { return features_matched_well && features_poor_frames >= kLostFrames; }
