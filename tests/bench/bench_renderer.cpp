@@ -134,5 +134,26 @@ void BM_ExtractedFeatureStep640(benchmark::State& state) {
 }
 BENCHMARK(BM_ExtractedFeatureStep640)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The matching alone with step 0, the shift of the whole object searched within 90 px (the
+// tracker's first frames, and a lost object's search): the virtual image 20 px off.
+void BM_MatchFeatures640_GlobalSearch90(benchmark::State& state) {
+  RenderScene s(kRoot + "/assets/objects/ketchup_bottle/object.json");
+  RenderOutput real, virt;
+  s.renderer.Render(s.scene, real, false);
+  Scene shifted = s.scene;
+  for (SceneItem& item : shifted.items)
+    if (item.label == kObjectLabel) item.T_PM = MakeTransform(Vec3(0.012, -0.006, 0.0), Mat3::Identity()) * item.T_PM;
+  s.renderer.Render(shifted, virt, true);
+  std::vector<std::uint8_t> mask(virt.label.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = virt.label[i] == kObjectLabel;
+  FeatureParams p;
+  p.global_search_radius = 90;
+  MatchResult m;
+  for (auto _ : state) m = MatchFeatures(real.colour, virt.colour, &mask, p, nullptr, false);
+  state.counters["inliers"] = m.num_inliers();
+  state.counters["shift_px"] = m.debug.global_shift.norm();
+}
+BENCHMARK(BM_MatchFeatures640_GlobalSearch90)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 }  // namespace
 }  // namespace inhand
