@@ -279,6 +279,8 @@ int RunReplay(const ReplayCommand& cmd) {
     const TrackerStats ts = player.tracker(i).stats();
     s["images_fused"] = ts.images_fused;
     s["relocalizations"] = ts.relocalizations;
+    s["images_features_lost"] = ts.images_features_lost;
+    s["images_tags_elsewhere"] = ts.images_tags_elsewhere;
     s["images_dropped"] = ts.images_dropped_late + ts.images_dropped_busy + ts.images_rejected;
     s["joint_samples_dropped"] = ts.samples_dropped + ts.samples_rejected;
     if (st.with_truth > 0) {

@@ -177,6 +177,7 @@ TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
     tracker.Start(r.session.t(0), start, sigmas);
     Feed(r, tracker, n, 0.0, [&](int) { relocalized = std::max(relocalized, tracker.last_visual().relocalized); });
     EXPECT_EQ(tracker.stats().relocalizations, set == "jtf" ? 1 : 0) << set;  // once found, it is not lost again
+    EXPECT_EQ(tracker.stats().images_features_lost, set == "jtf" ? 1 : 0) << set;  // the frame before it
     error[set] = (tracker.T_PO().translation() - r.session.GroundTruthAt(r.session.t(n - 1)).translation()).norm();
   }
   EXPECT_GT(error["jt"], 0.02);
@@ -214,6 +215,7 @@ TEST(Tracker, TagsSeenWhereTheEstimateCannotBeMoveTheEstimateThere) {
     });
     SCOPED_TRACE("relocate_images " + std::to_string(relocate_images));
     EXPECT_EQ(tracker.stats().relocalizations, relocate_images == 0 ? 0 : 1);  // once found, not lost again
+    EXPECT_EQ(tracker.stats().images_tags_elsewhere, relocate_images == 0 ? 0 : 1);  // the image before it
     if (relocate_images > 0) {
       EXPECT_EQ(first, relocate_images);  // the first images in which the tags disagree
       EXPECT_GT(relocalized, 0.02);

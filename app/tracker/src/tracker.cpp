@@ -451,6 +451,9 @@ struct Tracker::Impl {
         s.fused = mine.fused;
       }
       ++stats.images_fused;
+      const VisualMemory after = proc.Memory();
+      stats.images_features_lost += after.features_lost();
+      stats.images_tags_elsewhere += after.tag_disagreements > 0;
       if (step.relocalized > 0.0) {
         ++stats.relocalizations;
         stats.last_relocalization_t = t_c;
@@ -461,11 +464,11 @@ struct Tracker::Impl {
       if (options.threaded) {
         adopt_state = f.state();
         std::swap(adopt_visual, step);
-        adopt_memory = proc.Memory();
+        adopt_memory = after;
         adopt_pending = true;
       } else {
         std::swap(last_visual, step);
-        memory = proc.Memory();
+        memory = after;
       }
       return;
     }

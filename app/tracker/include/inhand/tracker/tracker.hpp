@@ -66,6 +66,10 @@ struct TrackerStats {
   long rewinds = 0;                // images fused before joint samples already fused
   long samples_replayed = 0;       // joint samples re-applied after them
   long relocalizations = 0;        // images that found a lost object again (VisualStep::relocalized)
+  long images_features_lost = 0;   // images after which the extracted features were lost
+                                   // (VisualMemory::features_lost)
+  long images_tags_elsewhere = 0;  // images whose tags put the object where the estimate cannot
+                                   // be and that did not relocate it (yet; with relocation on)
   double last_relocalization_t = 0.0;  // [s] the last one's capture time (when relocalizations > 0)
   double last_relocalized = 0.0;       // [m] and how far from the estimate it found the object
 };
