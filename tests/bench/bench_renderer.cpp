@@ -135,7 +135,7 @@ void BM_ExtractedFeatureStep640(benchmark::State& state) {
 BENCHMARK(BM_ExtractedFeatureStep640)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The matching alone with step 0, the shift of the whole object searched within 90 px (the
-// tracker's first frames, and a lost object's search): the virtual image 20 px off.
+// tracker's first frames, and a lost object's search): the virtual image about 25 px off.
 void BM_MatchFeatures640_GlobalSearch90(benchmark::State& state) {
   RenderScene s(kRoot + "/assets/objects/ketchup_bottle/object.json");
   RenderOutput real, virt;
