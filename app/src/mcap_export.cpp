@@ -104,7 +104,10 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
     Json e = {{"sigma_position_mm", {r.sigma_position.x() * 1000, r.sigma_position.y() * 1000, r.sigma_position.z() * 1000}},
               {"sigma_orientation_deg",
                {r.sigma_orientation.x() * 180 / M_PI, r.sigma_orientation.y() * 180 / M_PI, r.sigma_orientation.z() * 180 / M_PI}},
-              {"constraints", r.constraints}};
+              {"constraints", r.constraints},
+              {"slipping", r.slipping},
+              {"features_lost", r.features_lost},
+              {"tags_elsewhere", r.tags_elsewhere}};
     if (std::isfinite(r.position_error)) {
       e["position_error_mm"] = r.position_error * 1000;
       e["orientation_error_deg"] = r.orientation_error * 180 / M_PI;

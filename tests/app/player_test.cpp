@@ -140,6 +140,9 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
     for (std::size_t i = 0; i < 2; ++i) {
       EXPECT_EQ(st.sets[i].slipping, player.tracker(i).filter().trace().slipping);
       EXPECT_EQ(st.sets[i].memory, player.tracker(i).visual_memory());
+      EXPECT_EQ(player.last(i).slipping, st.sets[i].slipping);  // the record the MCAP export writes
+      EXPECT_EQ(player.last(i).tags_elsewhere, st.sets[i].memory.tag_disagreements > 0);
+      EXPECT_EQ(player.last(i).features_lost, st.sets[i].memory.features_lost());
       elsewhere_samples[i] += st.sets[i].memory.tag_disagreements > 0;
       EXPECT_FALSE(st.sets[i].memory.features_lost());
       slipping_samples[i] += st.sets[i].slipping;

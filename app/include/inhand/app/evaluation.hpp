@@ -27,6 +27,11 @@ struct EstimateRecord {
   double nees = std::numeric_limits<double>::quiet_NaN();  // 6-D pose error against P, when truth exists
   double visual_ms = -1.0;  // last visual step (detection + update) when one ran at this sample
   int visual_used = 0;      // features used by it
+  // What the HUD says beside the numbers (FrameComposer): the grip loosened (FilterTrace::
+  // slipping), the extracted features are lost, the tags see the object elsewhere (VisualMemory).
+  bool slipping = false;
+  bool features_lost = false;
+  bool tags_elsewhere = false;
 };
 
 // Fills the errors against the true pose and the NEES of the pose against its covariance P
