@@ -42,8 +42,6 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
     set.position_covariance = f.covariance().topLeftCorner<3, 3>();
     set.contacts = f.trace().contacts;
     set.visual = f.trace().visual;
-    set.slipping = f.trace().slipping;
-    set.memory = p.tracker(i).visual_memory();
     const TrackerStats stats = p.tracker(i).stats();
     if (stats.relocalizations > 0 && stats.last_relocalization_t <= t && t - stats.last_relocalization_t <= 1.0)
       set.found_again = stats.last_relocalized;
@@ -76,9 +74,9 @@ void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const
       line << r.position_error * 1000 << " mm / " << r.orientation_error * 180 / M_PI << " deg, ";
     line << r.constraints << " constraints";
     if (set.found_again > 0.0) line << ", found again " << set.found_again * 1000 << " mm away";
-    if (set.memory.features_lost()) line << ", object not matched in " << set.memory.features_poor_frames << " frames";
-    if (set.memory.tag_disagreements > 0) line << ", tags see it elsewhere";
-    if (set.slipping) line << ", grip loosened";
+    if (r.memory.features_lost()) line << ", object not matched in " << r.memory.features_poor_frames << " frames";
+    if (r.memory.tag_disagreements > 0) line << ", tags see it elsewhere";
+    if (r.slipping) line << ", grip loosened";
     of->hud.push_back(line.str());
   }
 }

@@ -106,8 +106,8 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
                {r.sigma_orientation.x() * 180 / M_PI, r.sigma_orientation.y() * 180 / M_PI, r.sigma_orientation.z() * 180 / M_PI}},
               {"constraints", r.constraints},
               {"slipping", r.slipping},
-              {"features_lost", r.features_lost},
-              {"tags_elsewhere", r.tags_elsewhere}};
+              {"features_lost", r.memory.features_lost()},
+              {"tags_elsewhere", r.memory.tag_disagreements > 0}};
     if (std::isfinite(r.position_error)) {
       e["position_error_mm"] = r.position_error * 1000;
       e["orientation_error_deg"] = r.orientation_error * 180 / M_PI;

@@ -166,9 +166,7 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
   r.biases = tracker.biases();
   r.gated = tracker.trace().num_gated;  // contacts and visual features of this sample
   r.slipping = tracker.trace().slipping;
-  const VisualMemory memory = tracker.visual_memory();
-  r.features_lost = memory.features_lost();
-  r.tags_elsewhere = memory.tag_disagreements > 0;
+  r.memory = tracker.visual_memory();
   if (TruthCovers(t)) CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
   else r = WithoutTruth(r);
 }

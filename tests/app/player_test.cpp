@@ -138,14 +138,13 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
     const app::PictureState st = app::FrameComposer::Capture(player, -1, t);
     ASSERT_EQ(st.sets.size(), 2u);
     for (std::size_t i = 0; i < 2; ++i) {
-      EXPECT_EQ(st.sets[i].slipping, player.tracker(i).filter().trace().slipping);
-      EXPECT_EQ(st.sets[i].memory, player.tracker(i).visual_memory());
-      EXPECT_EQ(player.last(i).slipping, st.sets[i].slipping);  // the record the MCAP export writes
-      EXPECT_EQ(player.last(i).tags_elsewhere, st.sets[i].memory.tag_disagreements > 0);
-      EXPECT_EQ(player.last(i).features_lost, st.sets[i].memory.features_lost());
-      elsewhere_samples[i] += st.sets[i].memory.tag_disagreements > 0;
-      EXPECT_FALSE(st.sets[i].memory.features_lost());
-      slipping_samples[i] += st.sets[i].slipping;
+      // The record the HUD and the MCAP export read.
+      const app::EstimateRecord& r = st.sets[i].record;
+      EXPECT_EQ(r.slipping, player.tracker(i).filter().trace().slipping);
+      EXPECT_EQ(r.memory, player.tracker(i).visual_memory());
+      elsewhere_samples[i] += r.memory.tag_disagreements > 0;
+      EXPECT_FALSE(r.memory.features_lost());
+      slipping_samples[i] += r.slipping;
       if (st.sets[i].found_again > 0.0) {
         ++found_samples[i];
         const TrackerStats stats = player.tracker(i).stats();

@@ -259,10 +259,10 @@ struct Tracker::Impl {
 
   // Under the lock, with the worker idle (WaitForImages, the queue emptied): the visual step
   // continues with `m`.
-  void RecallLocked(const VisualMemory& m, long images_fused) {
+  void RecallLocked(const VisualMemory& m, long images_sequence) {
     memory = m;
     proc.Recall(m);
-    sequence = images_fused;
+    sequence = images_sequence;
   }
 
   void WaitForImages() {

@@ -4,6 +4,7 @@
 
 #include "inhand/core/so3.hpp"
 #include "inhand/filter/contact_model.hpp"
+#include "inhand/tracker/tracker.hpp"
 
 namespace inhand::app {
 
@@ -28,10 +29,9 @@ struct EstimateRecord {
   double visual_ms = -1.0;  // last visual step (detection + update) when one ran at this sample
   int visual_used = 0;      // features used by it
   // What the HUD says beside the numbers (FrameComposer): the grip loosened (FilterTrace::
-  // slipping), the extracted features are lost, the tags see the object elsewhere (VisualMemory).
+  // slipping); the extracted features are lost, the tags see the object elsewhere (VisualMemory).
   bool slipping = false;
-  bool features_lost = false;
-  bool tags_elsewhere = false;
+  VisualMemory memory;
 };
 
 // Fills the errors against the true pose and the NEES of the pose against its covariance P

@@ -21,11 +21,8 @@ struct PictureState {
     Mat3 position_covariance = Mat3::Zero();
     std::vector<FilterTrace::Contact> contacts;
     std::vector<FilterTrace::Visual> visual;
-    bool slipping = false;  // the grip loosened (FilterTrace::slipping): the object may move
-                            // beyond what the fingers' motion predicts
     double found_again = 0.0;  // [m] an image of the last second found the lost object this far
                                // from the estimate (TrackerStats::last_relocalized)
-    VisualMemory memory;       // the visual step's (lost features, tags that disagree)
   };
   std::vector<Set> sets;
   std::vector<Transform> link_poses;  // the hand as the last set believes it (biased joints)
