@@ -1,5 +1,7 @@
 #include "inhand/app/frame_composer.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -23,6 +25,26 @@ OverlayContact::Kind Kind(ContactKind k) {
 
 }  // namespace
 
+double LargestSigma(const Mat3& covariance) {
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(covariance, Eigen::EigenvaluesOnly);
+  return std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+}
+
+std::string HudLine(const std::string& name, const PictureState::Set& set) {
+  const EstimateRecord& r = set.record;
+  std::ostringstream line;
+  line << std::fixed << std::setprecision(1) << name << ": ";
+  if (std::isfinite(r.position_error)) line << r.position_error * 1000 << " mm / " << r.orientation_error * 180 / M_PI << " deg, ";
+  line << "sigma " << LargestSigma(set.pose_covariance.topLeftCorner<3, 3>()) * 1000 << " mm / "
+       << LargestSigma(set.pose_covariance.block<3, 3>(3, 3)) * 180 / M_PI << " deg, ";
+  line << r.constraints << (r.constraints == 1 ? " constraint" : " constraints");
+  if (set.found_again > 0.0) line << ", found again " << set.found_again * 1000 << " mm away";
+  if (r.memory.features_lost()) line << ", object not matched in " << r.memory.features_poor_frames << " frames";
+  if (r.memory.tag_disagreements > 0) line << ", tags see it elsewhere";
+  if (r.slipping) line << ", grip loosened";
+  return line.str();
+}
+
 FrameComposer::FrameComposer(const SessionPlayer& player) : p_(player) {
   hand_meshes_ = UploadHand(renderer_, p_.models().hand);
   object_meshes_ = UploadObject(renderer_, p_.models().object, PrintedTagMeshes(p_.models().object));
@@ -39,7 +61,7 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
     const Filter& f = p.tracker(i).filter();
     PictureState::Set set;
     set.record = p.last(i);
-    set.position_covariance = f.covariance().topLeftCorner<3, 3>();
+    set.pose_covariance = f.covariance().topLeftCorner<6, 6>();
     set.contacts = f.trace().contacts;
     set.visual = f.trace().visual;
     const TrackerStats stats = p.tracker(i).stats();
@@ -64,20 +86,11 @@ void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const PictureState::Set& set = st.sets[i];
     const EstimateRecord& r = set.record;
-    OverlayEstimate e{p_.sets()[i].name, p_.sets()[i].colour, r.T_PO, set.position_covariance, false, {}, {}};
+    OverlayEstimate e{p_.sets()[i].name, p_.sets()[i].colour, r.T_PO, set.pose_covariance.topLeftCorner<3, 3>(), false, {}, {}};
     for (const FilterTrace::Contact& c : set.contacts) e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
     for (const FilterTrace::Visual& v : set.visual) e.features.push_back({v.measured, v.predicted, !v.gated});
     of->estimates.push_back(e);
-    std::ostringstream line;
-    line << std::fixed << std::setprecision(1) << p_.sets()[i].name << ": ";
-    if (std::isfinite(r.position_error))
-      line << r.position_error * 1000 << " mm / " << r.orientation_error * 180 / M_PI << " deg, ";
-    line << r.constraints << " constraints";
-    if (set.found_again > 0.0) line << ", found again " << set.found_again * 1000 << " mm away";
-    if (r.memory.features_lost()) line << ", object not matched in " << r.memory.features_poor_frames << " frames";
-    if (r.memory.tag_disagreements > 0) line << ", tags see it elsewhere";
-    if (r.slipping) line << ", grip loosened";
-    of->hud.push_back(line.str());
+    of->hud.push_back(HudLine(p_.sets()[i].name, set));
   }
 }
 
@@ -136,8 +149,10 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
   RenderOutput orbit_out;
   renderer_.Render(ExternalScene(st, K), orbit_out, false);
+  const bool truth = s.has_groundtruth();
   return SideBySide({&annotated, middle, &orbit_out.colour},
-                    {"camera + estimates (truth dashed)", virtual_caption, "3-D view: truth dark, estimates translucent"});
+                    {truth ? "camera + estimates (truth dashed)" : "camera + estimates (no ground truth)", virtual_caption,
+                     truth ? "3-D view: truth dark, estimates translucent" : "3-D view: estimates translucent"});
 }
 
 Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height, const OverlayLayers& layers) {
@@ -150,7 +165,8 @@ Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int hei
   of.K = scene.K;
   of.friction_cone_deg = p_.params().filter.friction_cone_deg;
   std::ostringstream hud;
-  hud << std::fixed << std::setprecision(3) << "t = " << st.t << " s   3-D view (no camera): truth dark, estimates translucent";
+  hud << std::fixed << std::setprecision(3) << "t = " << st.t << " s   3-D view (no camera): "
+      << (p_.session().has_groundtruth() ? "truth dark, estimates translucent" : "estimates translucent, no ground truth");
   of.hud.push_back(hud.str());
   AddEstimates(&of, st);
   // The objects are already drawn in 3-D: the overlays add contacts, forces, axes and the HUD.

@@ -389,8 +389,10 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::SetNextWindowSize(ImVec2(static_cast<float>(width) - kPanelWidth, static_cast<float>(height)));
   ImGui::Begin("views", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
   const float avail = ImGui::GetContentRegionAvail().x;
-  ImGui::TextUnformatted(runner.player().session().info().camera ? "camera + estimates (truth dashed) | virtual view | 3-D view"
-                                                                  : "3-D view (the session has no camera)");
+  const Session& shown = runner.player().session();
+  ImGui::TextUnformatted(!shown.info().camera        ? "3-D view (the session has no camera)"
+                         : shown.has_groundtruth() ? "camera + estimates (truth dashed) | virtual view | 3-D view"
+                                                   : "camera + estimates (no ground truth) | virtual view | 3-D view");
   tex.picture.Show(avail);
   if (ImGui::IsItemHovered()) {
     const ImGuiIO& io = ImGui::GetIO();

@@ -23,6 +23,7 @@ bool ProjectP(const Transform& T_CP, const Intrinsics& K, const Vec3& X_P, Vec2&
 
 // cv drawing takes fixed-point coordinates with `shift` fractional bits: sub-pixel accuracy.
 constexpr int kShift = 4;
+constexpr double kHudScale = 0.45;  // the HUD's font size (cv::FONT_HERSHEY_SIMPLEX)
 cv::Point Fx(const Vec2& p) {
   return cv::Point(static_cast<int>(std::lround((p.x()) * (1 << kShift))),
                    static_cast<int>(std::lround((p.y()) * (1 << kShift))));
@@ -185,14 +186,16 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
   }
 
   if (layers.hud && !frame.hud.empty()) {
-    const double scale = 0.45;
     int y = 6;
-    for (const std::string& line : frame.hud) {
+    std::vector<std::string> lines;
+    for (const std::string& line : frame.hud)
+      for (std::string& piece : WrapHudLine(line, img.cols - 16)) lines.push_back(std::move(piece));
+    for (const std::string& line : lines) {
       int base = 0;
-      const cv::Size sz = cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &base);
+      const cv::Size sz = cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, kHudScale, 1, &base);
       cv::Mat roi = img(cv::Rect(4, y, std::min(sz.width + 8, img.cols - 4), std::min(sz.height + base + 6, img.rows - y)));
       roi = roi * 0.35;
-      cv::putText(img, line, cv::Point(8, y + sz.height + 3), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+      cv::putText(img, line, cv::Point(8, y + sz.height + 3), cv::FONT_HERSHEY_SIMPLEX, kHudScale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
       y += sz.height + base + 8;
       if (y > img.rows - 20) break;
     }
@@ -238,6 +241,43 @@ Image8 SideBySide(const std::vector<const Image8*>& images, const std::vector<st
   Image8 out(all.cols, all.rows, 3);
   std::memcpy(out.data.data(), all.data, out.data.size());
   return out;
+}
+
+std::vector<std::string> WrapHudLine(const std::string& line, int max_width) {
+  const auto fits = [&](const std::string& text) {
+    int base = 0;
+    return cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, kHudScale, 1, &base).width <= max_width;
+  };
+  // Clauses end at ", " (which stays with the clause before it); a clause too wide for a line of
+  // its own is cut between words.
+  std::vector<std::string> parts;
+  for (std::size_t i = 0; i < line.size();) {
+    std::size_t end = line.find(", ", i);
+    end = end == std::string::npos ? line.size() : end + 2;
+    const std::string clause = line.substr(i, end - i);
+    if (fits("  " + clause)) {
+      parts.push_back(clause);
+    } else {
+      for (std::size_t w = 0; w < clause.size();) {
+        std::size_t space = clause.find(' ', w);
+        space = space == std::string::npos ? clause.size() : space + 1;
+        parts.push_back(clause.substr(w, space - w));
+        w = space;
+      }
+    }
+    i = end;
+  }
+  std::vector<std::string> pieces(1);
+  for (const std::string& part : parts) {
+    if (pieces.back().find_first_not_of(' ') == std::string::npos || fits(pieces.back() + part)) {
+      pieces.back() += part;
+    } else {
+      while (pieces.back().back() == ' ') pieces.back().pop_back();
+      pieces.push_back("  " + part);
+    }
+  }
+  while (!pieces.back().empty() && pieces.back().back() == ' ') pieces.back().pop_back();
+  return pieces;
 }
 
 }  // namespace inhand

@@ -165,6 +165,28 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
   EXPECT_EQ(elsewhere_samples[1], 50);  // from the first image to the second, at 10 Hz
 }
 
+// Each set's HUD line says what the set claims beside what it gets wrong: the largest principal σ
+// of its position and of its orientation (a covariance turned away from the axes, whose
+// principal σ are 1, 3, 2 mm and 1, 5, 2 deg), the error only where there is ground truth.
+TEST(FrameComposer, TheHudLineGivesTheLargestSigmaOfPositionAndOrientation) {
+  app::PictureState::Set set;
+  const Mat3 Q = ExpSO3(Vec3(0.3, -0.5, 0.8));
+  const double deg = M_PI / 180;
+  set.pose_covariance.topLeftCorner<3, 3>() = Q * Vec3(1e-3, 3e-3, 2e-3).cwiseAbs2().asDiagonal() * Q.transpose();
+  set.pose_covariance.bottomRightCorner<3, 3>() = Q.transpose() * Vec3(1 * deg, 5 * deg, 2 * deg).cwiseAbs2().asDiagonal() * Q;
+  set.pose_covariance.topRightCorner<3, 3>() = 1e-6 * Q;  // correlations do not enter
+  set.pose_covariance.bottomLeftCorner<3, 3>() = 1e-6 * Q.transpose();
+  EXPECT_NEAR(app::LargestSigma(set.pose_covariance.topLeftCorner<3, 3>()), 3e-3, 1e-12);
+  set.record.constraints = 1;
+  EXPECT_EQ(app::HudLine("j", set), "j: sigma 3.0 mm / 5.0 deg, 1 constraint");
+  set.record.position_error = 0.0142;
+  set.record.orientation_error = 6.1 * deg;
+  set.record.constraints = 2;
+  set.record.slipping = true;
+  set.found_again = 0.0466;
+  EXPECT_EQ(app::HudLine("jta", set), "jta: 14.2 mm / 6.1 deg, sigma 3.0 mm / 5.0 deg, 2 constraints, found again 46.6 mm away, grip loosened");
+}
+
 // A hand without torque sensors: the same recording with its tau: columns removed replays j
 // bit-identically (torques never reach j), runs ja and jf by default, and refuses jt.
 TEST(SessionPlayer, TorqueFreeSessionRunsJointsTagsAndFeatures) {

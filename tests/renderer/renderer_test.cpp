@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 
@@ -352,6 +353,60 @@ TEST(Golden, Fig1StyleOverlay) {
     EXPECT_GT(n, 100) << int(c.r) << "," << int(c.g) << "," << int(c.b);
   }
   ExpectGolden(painted, "overlay_fig1.png");
+}
+
+// A HUD line longer than the picture is wide (a set's error, σ, constraints and what its tracker
+// says) breaks into lines that stay inside it: between clauses where it can, between words inside
+// a clause too wide for a line of its own, never inside a word. Nothing is lost or reordered.
+TEST(Overlay, LongHudLinesWrapInsideThePicture) {
+  const std::string line = "jtf: 63.5 mm / 117.8 deg, sigma 10.1 mm / 9.3 deg, 1 constraint, object not matched in 14 frames";
+  const auto joined = [](const std::vector<std::string>& pieces) {
+    std::string all;
+    for (const std::string& p : pieces) all += (all.empty() ? "" : " ") + p.substr(p.find_first_not_of(' '));
+    return all;
+  };
+  EXPECT_EQ(WrapHudLine(line, 10000), std::vector<std::string>{line});
+  EXPECT_EQ(WrapHudLine("", 100), std::vector<std::string>{""});
+  const std::vector<std::string> clauses = WrapHudLine(line, 330);
+  ASSERT_GE(clauses.size(), 2u);
+  EXPECT_EQ(joined(clauses), line);
+  for (std::size_t i = 0; i + 1 < clauses.size(); ++i) EXPECT_EQ(clauses[i].back(), ',') << clauses[i];
+  for (std::size_t i = 1; i < clauses.size(); ++i) EXPECT_EQ(clauses[i].rfind("  ", 0), 0u) << clauses[i];
+  const std::vector<std::string> words = WrapHudLine(line, 120);  // narrower than most clauses
+  EXPECT_GT(words.size(), clauses.size());
+  EXPECT_EQ(joined(words), line);
+  EXPECT_EQ(WrapHudLine("unbreakable_word_wider_than_the_line", 20), std::vector<std::string>{"unbreakable_word_wider_than_the_line"});
+  // Odd spacing and commas: no character but spaces is lost, added or moved.
+  const auto squeezed = [](const std::string& text) {
+    std::string out;
+    for (const char c : text)
+      if (c != ' ') out += c;
+    return out;
+  };
+  for (const std::string odd : {"  ,  , x   y ,", " ", ", , ,", "a,b, c ,d", "  wide_word  wide_word_two , x"}) {
+    std::string all;
+    for (const std::string& piece : WrapHudLine(odd, 5)) all += piece;
+    EXPECT_EQ(squeezed(all), squeezed(odd)) << "'" << odd << "'";
+  }
+
+  // Painted on a 320-pixel-wide picture: the HUD darkens its boxes, but not the right margin.
+  Renderer& r = SharedRenderer();
+  OverlayPainter painter(r, {});
+  OverlayFrame frame;
+  frame.K = Camera();
+  frame.camera = Image8(frame.K.width, frame.K.height, 3);
+  std::fill(frame.camera.data.begin(), frame.camera.data.end(), std::uint8_t{200});
+  frame.hud = {"t = 1.250 s   frame 37", line};
+  const Image8 painted = painter.Paint(frame);
+  long darkened = 0, margin = 0;
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < painted.width; ++x) {
+      const bool dark = painted.pixel(x, y)[0] < 200;
+      darkened += dark;
+      margin += dark && x >= painted.width - 4;
+    }
+  EXPECT_GT(darkened, 4000);
+  EXPECT_EQ(margin, 0);
 }
 
 TEST(Video, H264FramesRoundTrip) {

@@ -18,7 +18,7 @@ struct PictureState {
   Image8 camera;  // that frame's image
   struct Set {
     EstimateRecord record;
-    Mat3 position_covariance = Mat3::Zero();
+    Mat6 pose_covariance = Mat6::Zero();  // the filter's, over (δp, δθ)
     std::vector<FilterTrace::Contact> contacts;
     std::vector<FilterTrace::Visual> visual;
     double found_again = 0.0;  // [m] an image of the last second found the lost object this far
@@ -30,6 +30,14 @@ struct PictureState {
   // estimate before the update): the middle panel, instead of rendering one more.
   Image8 matched_view;
 };
+
+// A set's HUD line: its name, the error against the truth (when there is one), the largest
+// principal σ of its position and of its orientation (what the set claims: on a recording without
+// ground truth, the only measure of how far to trust it), its constraints and what the tracker
+// says beside the numbers (found again, not matched, tags elsewhere, grip loosened).
+std::string HudLine(const std::string& name, const PictureState::Set& set);
+// √ of the largest eigenvalue of a covariance block.
+double LargestSigma(const Mat3& covariance);
 
 class FrameComposer {
  public:

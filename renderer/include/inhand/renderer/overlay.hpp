@@ -89,6 +89,10 @@ class OverlayPainter {
   std::vector<std::uint16_t> masks_;
 };
 
+// A HUD line broken between words so that every piece is at most `max_width` pixels wide in the
+// HUD's font (a single word wider than that stays whole); pieces after the first are indented.
+std::vector<std::string> WrapHudLine(const std::string& line, int max_width);
+
 // Places images side by side, scaled to the first one's height, with a caption bar each.
 Image8 SideBySide(const std::vector<const Image8*>& images, const std::vector<std::string>& captions = {});
 
