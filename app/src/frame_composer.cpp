@@ -102,7 +102,7 @@ Scene FrameComposer::ExternalScene(const PictureState& st, const Intrinsics& K) 
   const Aabb box = p_.models().object.Bounds();
   const Vec3 centre = st.sets.back().record.T_PO * box.Center();
   outside.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), orbit.distance, orbit.azimuth, orbit.elevation, Vec3::UnitY());
-  AddHand(outside, hand_meshes_, st.link_poses, 1.0);
+  AddHand(outside, hand_meshes_, st.link_poses, 1.0, true);
   if (s.has_groundtruth()) {
     ObjectStyle truth;
     truth.rgba = Eigen::Vector4d(0.15, 0.15, 0.15, 1.0);

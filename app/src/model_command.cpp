@@ -305,7 +305,7 @@ int RunModel(const ModelCommand& cmd) {
     RenderPreview(cmd.render, {hand.name, "side", "above"},
                   [&](Renderer& r, Scene& s, int) {
                     if (!meshes) meshes = UploadHand(r, hand);
-                    AddHand(s, *meshes, kin.link_poses());
+                    AddHand(s, *meshes, kin.link_poses(), 1.0, true);
                   },
                   box);
   }

@@ -1,14 +1,28 @@
 #include "inhand/renderer/views.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace inhand {
 
+std::optional<Eigen::Vector4d> LegibleColour(const Material& material) {
+  if (material.HasTexture()) return std::nullopt;
+  const Eigen::Vector4d& c = material.rgba;
+  const double luminance = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+  if (!(luminance < kLegibleBelow)) return std::nullopt;
+  const double grey = kLegibleLuminance - std::max(0.0, luminance);
+  return Eigen::Vector4d(std::max(0.0, c[0]) + grey, std::max(0.0, c[1]) + grey, std::max(0.0, c[2]) + grey, c[3]);
+}
+
 HandMeshes UploadHand(Renderer& renderer, const HandModel& hand) {
   HandMeshes out;
   out.link_meshes.resize(hand.links.size());
+  out.legible_rgba.resize(hand.links.size());
   for (std::size_t l = 0; l < hand.links.size(); ++l)
-    for (const TriangleMesh& m : hand.links[l].visual) out.link_meshes[l].push_back(renderer.AddMesh(m));
+    for (const TriangleMesh& m : hand.links[l].visual) {
+      out.link_meshes[l].push_back(renderer.AddMesh(m));
+      out.legible_rgba[l].push_back(LegibleColour(m.material));
+    }
   return out;
 }
 
@@ -19,11 +33,12 @@ std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object, con
   return ids;
 }
 
-void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform>& T_PL, double opacity) {
+void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform>& T_PL, double opacity, bool legible) {
   for (std::size_t l = 0; l < meshes.link_meshes.size(); ++l)
-    for (int id : meshes.link_meshes[l]) {
+    for (std::size_t k = 0; k < meshes.link_meshes[l].size(); ++k) {
       SceneItem item;
-      item.mesh = id;
+      item.mesh = meshes.link_meshes[l][k];
+      if (legible && l < meshes.legible_rgba.size() && k < meshes.legible_rgba[l].size()) item.rgba = meshes.legible_rgba[l][k];
       item.T_PM = T_PL.at(l);
       item.label = static_cast<std::uint16_t>(kHandLabelBase + l);
       item.opacity = opacity;

@@ -196,6 +196,63 @@ TEST(Renderer, LabelImageIdentifiesTheLinks) {
   EXPECT_EQ(out.label_at(2, 2), 0);
 }
 
+// A hand as dark as the Allegro's black anodised links (Kd 0.004) is a flat black silhouette in
+// the external 3-D view: its fingers cannot be told from the palm behind them. The explanatory
+// views draw it in its LegibleColour, which shows the shading: across the hand's pixels the
+// brightness varies (5th to 95th percentile), where it stayed within a few levels of black. Our
+// own hand's colours stay.
+TEST(Renderer, VeryDarkHandsAreDrawnLegiblyInTheExplanatoryViews) {
+  Renderer& r = SharedRenderer();
+  HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
+  {
+    const HandMeshes own = UploadHand(r, hand);
+    for (const auto& link : own.legible_rgba)
+      for (const auto& rgba : link) EXPECT_FALSE(rgba.has_value());
+  }
+  for (Link& link : hand.links)
+    for (TriangleMesh& m : link.visual) m.material.rgba = Eigen::Vector4d(0.004025, 0.004025, 0.004025, 1.0);
+  Material black;
+  black.rgba = Eigen::Vector4d(0.004, 0.002, 0.0, 0.5);
+  const std::optional<Eigen::Vector4d> lifted = LegibleColour(black);
+  ASSERT_TRUE(lifted.has_value());
+  EXPECT_NEAR(0.2126 * (*lifted)[0] + 0.7152 * (*lifted)[1] + 0.0722 * (*lifted)[2], kLegibleLuminance, 1e-12);
+  EXPECT_NEAR((*lifted)[0] - (*lifted)[2], 0.004, 1e-12);  // the hue's differences kept
+  EXPECT_EQ((*lifted)[3], 0.5);
+  black.texture_file = "/some/texture.png";
+  EXPECT_FALSE(LegibleColour(black).has_value());
+
+  const HandMeshes meshes = UploadHand(r, hand);
+  KinematicsData kin(hand);
+  kin.Update(hand, Eigen::VectorXd::Constant(hand.num_q(), 0.3));
+  const auto brightness_spread = [&](bool legible, double* mean) {
+    Scene scene;
+    scene.K = Camera(320, 320);
+    scene.T_PC = LookAt(Vec3(0.12, 0.2, 0.3), Vec3(0, 0.07, 0), Vec3::UnitY());
+    scene.background = Vec3(0.9, 0.9, 0.9);
+    AddHand(scene, meshes, kin.link_poses(), 1.0, legible);
+    RenderOutput out;
+    r.Render(scene, out);
+    std::vector<int> values;
+    for (int y = 0; y < out.height; ++y)
+      for (int x = 0; x < out.width; ++x)
+        if (out.label_at(x, y) >= kHandLabelBase) values.push_back(out.colour.pixel(x, y)[1]);
+    EXPECT_GT(values.size(), 5000u);
+    std::sort(values.begin(), values.end());
+    double sum = 0.0;
+    for (int v : values) sum += v;
+    *mean = sum / static_cast<double>(values.size());
+    return values[values.size() * 95 / 100] - values[values.size() * 5 / 100];
+  };
+  double mean_black = 0.0, mean_legible = 0.0;
+  const int black_spread = brightness_spread(false, &mean_black);
+  const int legible_spread = brightness_spread(true, &mean_legible);
+  // Measured: black 1 level of spread around a mean of 1.1; legible 18 around 29.
+  EXPECT_LE(black_spread, 4);
+  EXPECT_LT(mean_black, 5.0);
+  EXPECT_GT(legible_spread, 10);
+  EXPECT_GT(mean_legible, 20.0);
+}
+
 // One pass for many silhouettes (the overlays' estimates): each object's bit of the OR-ed mask
 // is exactly its own silhouette rendered alone, also where the objects overlap and occlude each
 // other; pixels no object covers are 0.

@@ -16,15 +16,27 @@ constexpr std::uint16_t kExtraLabelBase = 1000;
 
 struct HandMeshes {
   std::vector<std::vector<int>> link_meshes;  // per link, renderer mesh ids
+  // Per link and mesh: the colour the explanatory views (the external 3-D view, model previews)
+  // draw it in when its own is too dark to show its shape (LegibleColour), else empty.
+  std::vector<std::vector<std::optional<Eigen::Vector4d>>> legible_rgba;
 };
 HandMeshes UploadHand(Renderer& renderer, const HandModel& hand);
+// A material darker than kLegibleBelow (linear luminance, no texture) shows as a flat black
+// silhouette: the Allegro hand's black anodised links (Kd 0.004) hide every finger in front of
+// the palm. Its colour with grey added up to kLegibleLuminance (our hand's darkest links), hue
+// and opacity kept; empty for a material that shows its shape already.
+constexpr double kLegibleBelow = 0.05;
+constexpr double kLegibleLuminance = 0.16;
+std::optional<Eigen::Vector4d> LegibleColour(const Material& material);
 // The object's visual meshes, then `printed` (meshes already in the object frame: its printed
 // tags, see PrintedTagMeshes), all placed together by AddObject.
 std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object,
                               const std::vector<TriangleMesh>& printed = {});
 
+// `legible`: very dark links in their LegibleColour (views that explain; a camera's virtual view
+// keeps the materials).
 void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform>& T_PL,
-             double opacity = 1.0);
+             double opacity = 1.0, bool legible = false);
 struct ObjectStyle {
   std::optional<Eigen::Vector4d> rgba;  // flat colour instead of the materials
   double opacity = 1.0;
