@@ -432,7 +432,7 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##sig%zu", i);
         const EstimateRecord& last = p.last(i);
-        std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm, %.1f/%.1f/%.1f deg", last.sigma_position.x() * 1000,
+        std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm\n%.1f/%.1f/%.1f deg", last.sigma_position.x() * 1000,
                       last.sigma_position.y() * 1000, last.sigma_position.z() * 1000, last.sigma_orientation.x() * 180 / M_PI,
                       last.sigma_orientation.y() * 180 / M_PI, last.sigma_orientation.z() * 180 / M_PI);
         ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
