@@ -76,8 +76,7 @@ void StepBenchmark(benchmark::State& state, const std::string& urdf, const std::
   long k = 0, contacts = 0, constraints = 0;
   for (auto _ : state) {
     q.array() += (k++ % 2 ? -2e-4 : 2e-4);  // small finger motion, as at 1 kHz
-    filter.Predict(q, 0.001);
-    filter.UpdateContacts(tau);
+    filter.Step(q, tau, 0.001);
     contacts += static_cast<long>(filter.trace().contacts.size());
     constraints += filter.trace().num_constraints;
     benchmark::DoNotOptimize(filter.position());

@@ -333,8 +333,7 @@ TEST(Filter, StepAllocatesNothingAfterWarmUp) {
     Eigen::VectorXd q = s.q, tau = Eigen::VectorXd::Constant(16, 0.5);
     const auto step = [&](int k) {
       q.array() += (k % 2 ? -1e-4 : 1e-4);
-      filter.Predict(q, 0.001);
-      filter.UpdateContacts(tau);
+      filter.Step(q, tau, 0.001);
       return k % 10 == 0 ? filter.UpdateVisual(features, T_PC, K) : 0;
     };
     for (int k = 0; k < 20; ++k) step(k);
@@ -379,7 +378,8 @@ TEST(Filter, NonFiniteInputsAreSkippedAndCounted) {
   // such samples out before they reach the filter.)
 }
 
-// A saved state restored into another filter of the same hand continues bit-identically.
+// A saved state restored into another filter of the same hand continues bit-identically; the
+// restored one steps with Step, the original with its two halves (Step is exactly them).
 TEST(Filter, RestoredStateContinuesBitIdentically) {
   GraspScene s;
   FilterParams params;
@@ -388,13 +388,13 @@ TEST(Filter, RestoredStateContinuesBitIdentically) {
   a.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
   b.Reset(s.T_PO * MakeTransform(Vec3(0.01, 0, 0), Mat3::Identity()), s.q, StartSigmas{0.03, 0.1, 0.1, {}});
   Eigen::VectorXd q = s.q, tau = Eigen::VectorXd::Constant(16, 0.5);
-  const auto step = [&](Filter& f, int k) {
+  const auto halves = [&](Filter& f, int k) {
     f.Predict(q.array() + 1e-4 * (k % 3), 0.001);
     f.UpdateContacts(tau);
   };
-  for (int k = 0; k < 30; ++k) step(a, k);
+  for (int k = 0; k < 30; ++k) halves(a, k);
   b.Restore(a.state());
-  for (int k = 30; k < 60; ++k) step(a, k), step(b, k);
+  for (int k = 30; k < 60; ++k) halves(a, k), b.Step(q.array() + 1e-4 * (k % 3), tau, 0.001);
   EXPECT_EQ(a.T_PO().matrix(), b.T_PO().matrix());
   EXPECT_EQ(a.state().P, b.state().P);
   EXPECT_EQ(a.biases(), b.biases());

@@ -211,7 +211,7 @@ TEST(Grasp, ContradictoryContactsSettleAndStayConsistent) {
   EXPECT_LT(moved.tail<3>().norm(), 1.0 * M_PI / 180);
   // NEES of the 6-D pose error: every 0.1 s below chi2_6 at 99.9 % (22.46), the mean below the
   // 99 % bound of a mean of 100 (correlated) samples' expectation, 6 -> below 15 as issue 16 asks.
-  EXPECT_LT(worst_nees, 22.46);
+  EXPECT_LT(worst_nees, chi2::k6Dof999);
   EXPECT_LT(nees_sum / nees_n, 15.0);
 }
 

@@ -24,6 +24,7 @@
 #include "extracted_features.hpp"
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
+#include "inhand/filter/chi2.hpp"
 #include "tag_corners.hpp"
 
 namespace inhand {
@@ -169,16 +170,14 @@ struct Tracker::Impl {
       started = true;
       PreallocateRing();
     }
-    filter.Predict(q_used, dt);
-    filter.UpdateContacts(tau);
+    filter.Step(q_used, tau, dt);
     {
       std::lock_guard<std::mutex> lock(mutex);
       if (adopt_pending) {
         // The worker published while this sample was being fused: its state is at the previous
         // sample (it publishes only when it has every committed one), so fuse this one again on it.
         AdoptLocked();
-        filter.Predict(q_used, dt);
-        filter.UpdateContacts(tau);
+        filter.Step(q_used, tau, dt);
       }
       const long k = ++last;
       if (k - first >= static_cast<long>(ring.size())) first = k - static_cast<long>(ring.size()) + 1;
@@ -323,7 +322,7 @@ struct Tracker::Impl {
   static bool Disagrees(const Filter& f, const tracker_detail::TagCorners::PoseFit& fit) {
     const Vec6 d = PoseError(fit.T_PO, f.T_PO());
     const Mat6 S = f.covariance().topLeftCorner<6, 6>() + fit.covariance;
-    return d.dot(S.ldlt().solve(d)) > 22.46;
+    return d.dot(S.ldlt().solve(d)) > chi2::k6Dof999;
   }
 
   // Whether the tags of this image put the object where the estimate cannot be; if so, `where`
@@ -338,7 +337,7 @@ struct Tracker::Impl {
     if (fits.empty() || fits.front().cost > sigma * sigma * static_cast<double>(proc.measured.size())) return false;
     where = fits.front();
     for (const auto& fit : fits) {
-      if (fit.cost > fits.front().cost + 9.21 * sigma * sigma) break;
+      if (fit.cost > fits.front().cost + chi2::k2Dof99 * sigma * sigma) break;
       if (!Disagrees(f, fit)) return false;
       const Vec6 d = PoseError(fit.T_PO, where.T_PO);
       where.covariance += d * d.transpose();
@@ -347,8 +346,7 @@ struct Tracker::Impl {
   }
 
   void Replay(Filter& f, Slot& s) {
-    f.Predict(s.q, s.dt);
-    f.UpdateContacts(s.tau);
+    f.Step(s.q, s.tau, s.dt);
     s.after_sample = f.state();
     for (const VisualUpdate& u : s.fused) Apply(f, u);
   }

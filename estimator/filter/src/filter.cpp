@@ -207,6 +207,11 @@ void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt)
   s_.q_prev = q_meas;
 }
 
+void Filter::Step(const Eigen::Ref<const Eigen::VectorXd>& q_meas, const Eigen::Ref<const Eigen::VectorXd>& tau, double dt) {
+  Predict(q_meas, dt);
+  UpdateContacts(tau);
+}
+
 void Filter::GrowWithTravel(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt) {
   constexpr double kWindow = 0.05;  // [s]
   s_.window_time += dt;

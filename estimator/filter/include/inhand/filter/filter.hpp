@@ -125,9 +125,15 @@ class Filter {
   void Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd>& q_meas,
              const StartSigmas& sigmas = {});
 
+  // One joint sample: Predict to q_meas over dt, then UpdateContacts with tau at the joints
+  // just predicted to. The contact update reads the joints that Predict stored (FilterState::
+  // q_prev), so the two belong together; a joint-rate loop calls this.
+  void Step(const Eigen::Ref<const Eigen::VectorXd>& q_meas, const Eigen::Ref<const Eigen::VectorXd>& tau, double dt);
+  // The two halves of Step, for tests that look between them.
   // Moves the object with the fingers from the previous q_meas to this one over dt seconds.
   void Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt);
-  // Kinematic and (if enabled) torque contacts at the current estimate.
+  // Kinematic and (if enabled) torque contacts at the current estimate, at the joints of the
+  // last Predict (or Reset).
   void UpdateContacts(const Eigen::Ref<const Eigen::VectorXd>& tau);
   // Pixels of object points seen by a camera at T_PC (tag corners, extracted features). Returns
   // the number of features used. Allocates nothing once the trace has room for the features.

@@ -3,6 +3,8 @@
 // the constraint; JSON round-trips every field (replay --params, echoed into outputs).
 #include <string>
 
+#include "inhand/filter/chi2.hpp"
+
 namespace inhand {
 
 struct FilterParams {
@@ -110,7 +112,7 @@ struct FilterParams {
                                               // and the camera pose's error (0.5 deg of hand-eye
                                               // error is 5 px at 640x480, 45 deg fov); 4 px beat
                                               // 2, 5, 8 and 10 for tags and extracted features
-  double visual_gate_chi2 = 9.21;             // χ²₂ at 99 %
+  double visual_gate_chi2 = chi2::k2Dof99;   // χ²₂ at 99 %
   double visual_model_sigma = 4.0;            // [px] how well vision can know a feature's pixel
                                               // at all (camera calibration, hand-eye pose, object
                                               // model: the same error in every frame): the
