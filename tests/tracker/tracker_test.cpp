@@ -12,6 +12,7 @@
 #include "inhand/sessions/session.hpp"
 #include "inhand/sessions/simulator.hpp"
 #include "inhand/tracker/tracker.hpp"
+#include "history.hpp"
 #include "tag_corners.hpp"
 #include "test_support.hpp"
 
@@ -289,6 +290,36 @@ TEST(Tracker, ASnapshotContinuesBitIdentically) {
       EXPECT_EQ(tracker.stats().relocalizations, 1);
     }
   }
+}
+
+// The history keeps the newest samples of its ring, finds the sample an image captured at t_c
+// goes after (t <= t_c within kTimeTolerance) and takes copies of slots out and back.
+TEST(History, KeepsTheNewestSamplesAndFindsWhereAnImageGoes) {
+  tracker_detail::History h;
+  h.Resize(3);
+  EXPECT_LT(h.last(), h.first());
+  for (int k = 1; k <= 4; ++k) h.Push().t = 0.1 * k;
+  EXPECT_EQ(h.first(), 1);  // the sample at 0.1 s is forgotten
+  EXPECT_EQ(h.last(), 3);
+  EXPECT_DOUBLE_EQ(h.At(1).t, 0.2);
+  EXPECT_DOUBLE_EQ(h.At(3).t, 0.4);
+  EXPECT_EQ(h.LastAtOrBefore(0.35), 2);
+  EXPECT_EQ(h.LastAtOrBefore(1.0), 3);
+  EXPECT_EQ(h.LastAtOrBefore(h.At(2).t - 0.5 * tracker_detail::kTimeTolerance), 2);  // within the tolerance
+  EXPECT_EQ(h.LastAtOrBefore(h.At(2).t - 2.0 * tracker_detail::kTimeTolerance), 1);
+  EXPECT_LT(h.LastAtOrBefore(0.15), h.first());  // before everything held: too late to fuse
+  std::vector<TrackedSample> local;
+  h.CopyOut(2, 2, 3, local);
+  ASSERT_EQ(local.size(), 2u);
+  EXPECT_DOUBLE_EQ(local[1].t, 0.4);
+  local[1].fused.push_back(VisualUpdate::Features(0.35, Transform::Identity(), Intrinsics()));
+  local[1].t = -1.0;  // only checkpoints and visual updates go back
+  h.WriteBack(2, 3, local);
+  EXPECT_EQ(h.At(3).fused.size(), 1u);
+  EXPECT_DOUBLE_EQ(h.At(3).t, 0.4);
+  EXPECT_TRUE(h.At(2).fused.empty());
+  h.Clear();
+  EXPECT_LT(h.last(), h.first());
 }
 
 // The tags' own fit of the object's pose, on corners projected exactly from a known pose: from

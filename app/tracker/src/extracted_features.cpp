@@ -16,7 +16,8 @@ ExtractedFeatures::ExtractedFeatures(const HandModel& hand, const ObjectModel& o
 ExtractedFeatures::~ExtractedFeatures() = default;
 
 void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& f,
-                                VisualStep& step, std::vector<VisualFeature>& out) {
+                                VisualStep& step, VisualUpdate& update) {
+  std::vector<VisualFeature>& out = update.features;
   if (!renderer_) {
     renderer_ = std::make_unique<Renderer>();
     hand_meshes_ = UploadHand(*renderer_, hand_);
@@ -98,9 +99,31 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     }
   }
   matched_well_ = matched_well_ || well;
+  update.widen_position = step.relocalized;
+  Residuals(f, update, step.residual_before);
 }
 
-void ExtractedFeatures::Fused(int used) { poor_frames_ = used >= kWellMatched ? 0 : poor_frames_ + 1; }
+void ExtractedFeatures::Fused(const Filter& f, const VisualUpdate& update, int used, VisualStep& step) {
+  poor_frames_ = used >= kWellMatched ? 0 : poor_frames_ + 1;
+  Residuals(f, update, step.residual_after);
+}
+
+void ExtractedFeatures::Remember(VisualMemory& memory) const {
+  memory.features_matched_well = matched_well_;
+  memory.features_poor_frames = poor_frames_;
+}
+
+void ExtractedFeatures::Recall(const VisualMemory& memory) {
+  matched_well_ = memory.features_matched_well;
+  poor_frames_ = memory.features_poor_frames;
+}
+
+void ExtractedFeatures::Residuals(const Filter& f, const VisualUpdate& update, std::vector<double>& out) {
+  const Transform T_CP = update.T_PC.inverse();
+  const Transform T_PO = f.T_PO();
+  out.clear();
+  for (const VisualFeature& v : update.features) out.push_back((update.K.Project(T_CP * (T_PO * v.x_O)) - v.pixel).norm());
+}
 
 // Inliers to object points through the virtual depth, moved into O with the estimate.
 void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,

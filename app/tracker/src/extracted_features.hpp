@@ -10,22 +10,23 @@
 #include "inhand/filter/filter.hpp"
 #include "inhand/renderer/views.hpp"
 #include "inhand/tracker/tracker.hpp"
+#include "visual_source.hpp"
 
 namespace inhand::tracker_detail {
 
-class ExtractedFeatures {
+class ExtractedFeatures final : public VisualSource {
  public:
   ExtractedFeatures(const HandModel& hand, const ObjectModel& object, const FeatureParams& params);
-  ~ExtractedFeatures();
-  // Fills step.virtual_view, step.match, step.used_match and step.relocalized, and `out`.
-  // Fused() must follow with the number of them the filter fused (not gated).
+  ~ExtractedFeatures() override;
+  // Fills step.virtual_view, step.match, step.used_match, step.relocalized (also the update's
+  // widening: the object found again that far away) and step.residual_before, and the update's
+  // features.
   void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
-               VisualStep& step, std::vector<VisualFeature>& out);
-  void Fused(int used);
-  // What Measure carries from one frame to the next (VisualMemory), to save and to set back.
-  bool matched_well() const { return matched_well_; }
-  int poor_frames() const { return poor_frames_; }
-  void Recall(bool matched_well, int poor_frames) { matched_well_ = matched_well, poor_frames_ = poor_frames; }
+               VisualStep& step, VisualUpdate& update) override;
+  // Counts a poorly matched frame (fewer than kWellMatched fused); step.residual_after.
+  void Fused(const Filter& filter, const VisualUpdate& update, int used, VisualStep& step) override;
+  void Remember(VisualMemory& memory) const override;
+  void Recall(const VisualMemory& memory) override;
 
  private:
   const HandModel& hand_;
@@ -43,6 +44,8 @@ class ExtractedFeatures {
   void Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
                const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const;
   static bool OnOutline(const RenderOutput& view, int x, int y);
+  // [px] each feature's distance from where the filter's pose puts its point.
+  static void Residuals(const Filter& f, const VisualUpdate& update, std::vector<double>& out);
   static constexpr int kOutlinePixels = 2;  // a corner this close to the background is on the outline
   static constexpr int kWellMatched = VisualMemory::kWellMatched;  // inliers on the object that
                                                                    // end the wide first search

@@ -113,6 +113,14 @@ struct VisualUpdate {
   std::vector<VisualFeature> features;
   Transform T_PC = Transform::Identity();
   Intrinsics K;
+
+  // Features of the image captured at t_capture by a camera at T_PC, fused after the position's
+  // σ is widened by `widen_position` (none: 0).
+  static VisualUpdate Features(double t_capture, const Transform& T_PC, const Intrinsics& K, double widen_position = 0.0,
+                               std::vector<VisualFeature> features = {});
+  // The object put at T_PO with `covariance` (Filter::Relocate).
+  static VisualUpdate Relocation(double t_capture, const Transform& T_PO, const Mat6& covariance, const Transform& T_PC,
+                                 const Intrinsics& K);
 };
 
 // One joint sample as the tracker keeps it: the sample, the filter's checkpoint after its
