@@ -42,9 +42,12 @@ SessionPlayer::SessionPlayer(const Session& session, const TrackerParams& params
   const int n = session_.num_samples();
   for (int k = 0; k < n; ++k) {
     Gather(k, q_, tau_);
-    const RejectedJoint r = ScreenJointSample(models_.hand, params_, q_, tau_);
+    const RejectedJoint r = ScreenJointSample(models_.hand, params_.joint_limit_margin, q_, tau_);
     if (r.joint >= 0) report_.rejected_samples.push_back({k, r.joint, r.torque, r.torque ? tau_[r.joint] : q_[r.joint]});
   }
+  if (n > 0 && report_.rejected_samples.size() == static_cast<std::size_t>(n))
+    throw InputError(session_.Resolve("joints.csv") + ": none of its " + std::to_string(n) +
+                     " joint samples can be fused; the first: " + report_.Describe(session_, models_, params_, report_.rejected_samples.front()));
   for (const CameraFrame& f : session_.camera_frames()) report_.frames_before_first_sample += n > 0 && f.t < session_.t(0) - 1e-9;
   if (session_.has_groundtruth() && n > 0) {
     report_.truth_from = session_.groundtruth().front().t;
@@ -65,24 +68,25 @@ bool SessionPlayer::TruthCovers(double t) const {
   return session_.has_groundtruth() && t >= session_.groundtruth().front().t - 1e-9 && t <= session_.groundtruth().back().t + 1e-9;
 }
 
+std::string SessionPlayer::InputReport::Describe(const Session& session, const SessionModels& models, const TrackerParams& params,
+                                                 const Rejected& r) {
+  const Joint& joint = models.hand.joints[static_cast<std::size_t>(models.hand.q_joints[static_cast<std::size_t>(r.joint)])];
+  std::ostringstream line;
+  line << session.Resolve("joints.csv") << ":" << r.sample + 2 << ": " << (r.torque ? "tau:" : "q:")
+       << models.hand.QNames()[static_cast<std::size_t>(r.joint)] << " = " << r.value;
+  if (r.torque || !std::isfinite(r.value)) line << " is not a number";
+  else if (joint.has_limits) line << " is beyond its limits [" << joint.lower << ", " << joint.upper << "] by more than " << params.joint_limit_margin;
+  else line << " is beyond +-1000";
+  return line.str();
+}
+
 std::vector<std::string> SessionPlayer::InputReport::Warnings(const Session& session, const SessionModels& models,
                                                               const TrackerParams& params) const {
   std::vector<std::string> out = session.LimitWarnings(models.hand, models.joint_columns);
   for (std::string& line : out)
     line += params.joint_clamp_to_limits ? "; clamped to the limit" : "; kept as measured (joints.clamp_to_limits to clamp)";
-  const std::vector<std::string> names = models.hand.QNames();
-  for (std::size_t i = 0; i < rejected_samples.size() && i < 5; ++i) {
-    const Rejected& r = rejected_samples[i];
-    const Joint& joint = models.hand.joints[static_cast<std::size_t>(models.hand.q_joints[static_cast<std::size_t>(r.joint)])];
-    std::ostringstream line;
-    line << session.Resolve("joints.csv") << ":" << r.sample + 2 << ": " << (r.torque ? "tau:" : "q:") << names[static_cast<std::size_t>(r.joint)]
-         << " = " << r.value;
-    if (r.torque || !std::isfinite(r.value)) line << " is not a number";
-    else if (joint.has_limits) line << " is beyond its limits [" << joint.lower << ", " << joint.upper << "] by more than " << params.joint_limit_margin;
-    else line << " is beyond +-1000";
-    line << "; sample dropped";
-    out.push_back(line.str());
-  }
+  for (std::size_t i = 0; i < rejected_samples.size() && i < 5; ++i)
+    out.push_back(Describe(session, models, params, rejected_samples[i]) + "; sample dropped");
   if (rejected_samples.size() > 5)
     out.push_back(session.Resolve("joints.csv") + ": " + std::to_string(rejected_samples.size()) + " joint samples dropped in all");
   if (frames_before_first_sample > 0)

@@ -95,12 +95,13 @@ TEST(Robustness, StaleStagingFoldersAreRemoved) {
 
 
 // A copy of the session whose joints.csv has `value` in column `column` of sample `sample`.
+constexpr int kEverySample = -2;  // WithJoint's `sample`: every one
 std::string WithJoint(const test::TempDir& dir, const std::string& name, int sample, int column, const std::string& value) {
   fs::copy(Session(), dir / name, fs::copy_options::recursive);
   std::stringstream in(Read(dir / (name + "/joints.csv")));
   std::string out, line;
   for (int k = -1; std::getline(in, line); ++k) {
-    if (k == sample) {
+    if (k == sample || (sample == kEverySample && k >= 0)) {
       std::size_t start = 0;
       for (int c = 0; c < column; ++c) start = line.find(',', start) + 1;
       const std::size_t end = line.find(',', start);
@@ -142,6 +143,18 @@ TEST(Robustness, AnAbsurdJointSampleIsDroppedAndReported) {
     EXPECT_EQ(Read(dir / ("r" + value) + "/estimates.csv").find("nan"), std::string::npos);
     EXPECT_EQ(Read(dir / ("r" + value) + "/estimates.csv").find("inf"), std::string::npos);
   }
+}
+
+// A session none of whose joint samples can be fused is refused, by name, with no output: not
+// replayed into an estimate that is the start's and nothing else.
+TEST(Robustness, ASessionWithoutAFusableJointSampleIsRefused) {
+  test::TempDir dir;
+  const std::string session = WithJoint(dir, "s", kEverySample, 3, "1000");
+  const test::CommandResult r = test::RunInhand("replay " + session + " --no-video --modalities j --out " + (dir / "r"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(session + "/joints.csv: none of its "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("joint samples can be fused; the first: " + session + "/joints.csv:2: q:"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "r"));
 }
 
 // Encoders overshoot their URDF's limits (19 of 20 recorded Allegro grasps pass joint_12.0's

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
 #include <map>
 #include <string>
 
@@ -10,6 +12,7 @@
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/filter/filter.hpp"
+#include "inhand/filter/joint_samples.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "test_support.hpp"
@@ -236,14 +239,6 @@ TEST(Filter, JointBiasConvergesWhenAContactConstrainsIt) {
   EXPECT_LT((filter.position() - T_PO.translation()).norm(), 5e-5);
 }
 
-Eigen::VectorXd Clamp(const HandModel& hand, Eigen::VectorXd q) {
-  for (int i = 0; i < hand.num_q(); ++i) {
-    const Joint& j = hand.joints[hand.q_joints[i]];
-    q[i] = std::clamp(q[i], j.lower, j.upper);
-  }
-  return q;
-}
-
 // The camera of the visual tests: 0.4 m from p, z towards it, y roughly down.
 Transform CameraLookingAt(const Vec3& p) {
   const Vec3 eye(0.05, -0.3, 0.25);
@@ -294,7 +289,7 @@ TEST(Filter, CovarianceStaysSymmetricPositiveDefiniteOver10000Steps) {
   int with_contacts = 0;
   for (int k = 0; k < 10000; ++k) {
     for (int j = 0; j < 16; ++j) q[j] += 0.002 * noise(test::Rng()) + 0.0005 * std::sin(0.01 * k + j);
-    q = Clamp(s.hand, q);
+    ClampToLimits(s.hand, q);
     Eigen::VectorXd tau(16);
     for (int j = 0; j < 16; ++j) tau[j] = 0.3 * noise(test::Rng());
     filter.Predict(q, 0.001);
@@ -347,6 +342,54 @@ TEST(Filter, StepAllocatesNothingAfterWarmUp) {
     EXPECT_GT(constraints, 0);
     EXPECT_GT(used, 100);  // the visual updates fused features
   }
+}
+
+// What reaches the filter of a joint sample: numbers within the limits and the margin pass,
+// the first joint that is not (position or torque) is named; clamping and undeflection act on
+// the joints that have limits or stiffness only.
+TEST(JointSamples, ScreeningClampingAndUndeflection) {
+  GraspScene s;
+  const Eigen::VectorXd tau = Eigen::VectorXd::Constant(16, 0.5);
+  EXPECT_EQ(ScreenJointSample(s.hand, 0.5, s.q, tau).joint, -1);
+  const Joint& j3 = s.hand.joints[static_cast<std::size_t>(s.hand.q_joints[3])];
+  ASSERT_TRUE(j3.has_limits);
+  Eigen::VectorXd q = s.q;
+  q[3] = j3.upper + 0.4;  // within the margin
+  EXPECT_EQ(ScreenJointSample(s.hand, 0.5, q, tau).joint, -1);
+  EXPECT_EQ(ScreenJointSample(s.hand, 0.3, q, tau).joint, 3);
+  EXPECT_FALSE(ScreenJointSample(s.hand, 0.3, q, tau).torque);
+  Eigen::VectorXd bad_tau = tau;
+  bad_tau[7] = std::numeric_limits<double>::quiet_NaN();
+  const RejectedJoint r = ScreenJointSample(s.hand, 0.5, s.q, bad_tau);
+  EXPECT_EQ(r.joint, 7);
+  EXPECT_TRUE(r.torque);
+  q[5] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(ScreenJointSample(s.hand, 0.5, q, tau).joint, 5);
+  EXPECT_EQ(ScreenJointSample(s.hand, 0.3, q, tau).joint, 3);  // the first one
+  q[5] = s.q[5];
+  ClampToLimits(s.hand, q);
+  EXPECT_EQ(q[3], j3.upper);
+  for (int i = 0; i < 16; ++i) {
+    const Joint& j = s.hand.joints[static_cast<std::size_t>(s.hand.q_joints[static_cast<std::size_t>(i)])];
+    if (i == 3) continue;
+    EXPECT_EQ(q[i], j.has_limits ? std::clamp(s.q[i], j.lower, j.upper) : s.q[i]) << i;
+  }
+  q = s.q;
+
+  HandModel elastic = s.hand;
+  EXPECT_FALSE(HasElasticJoints(elastic));
+  elastic.joint_stiffness.assign(16, 0.0);
+  elastic.joint_stiffness[2] = 4.0;
+  ValidateJointStiffness(elastic);
+  EXPECT_TRUE(HasElasticJoints(elastic));
+  Undeflect(elastic, tau, q);
+  EXPECT_DOUBLE_EQ(q[2], s.q[2] - 0.5 / 4.0);
+  q[2] = s.q[2];
+  EXPECT_EQ(q, s.q);
+  elastic.joint_stiffness[9] = -1.0;
+  EXPECT_THROW(ValidateJointStiffness(elastic), InputError);
+  elastic.joint_stiffness.resize(3);
+  EXPECT_THROW(ValidateJointStiffness(elastic), InputError);
 }
 
 // Nothing non-finite enters the state: a joint sample of 1e300 rad or NaN, torques that are not

@@ -13,7 +13,6 @@
 #include <exception>
 #include <mutex>
 #include <ostream>
-#include <sstream>
 #include <thread>
 #include <utility>
 
@@ -21,6 +20,7 @@
 #include "image_fusion.hpp"
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
+#include "inhand/filter/joint_samples.hpp"
 
 namespace inhand {
 
@@ -51,17 +51,8 @@ struct Tracker::Impl {
         query(h, o),
         filter(h, query, p.filter, tracker_detail::FilterOptionsFor(o, m)) {
     params.Validate();
-    const std::vector<double>& ks = h.joint_stiffness;
-    if (!ks.empty() && ks.size() != static_cast<std::size_t>(h.num_q()))
-      throw InputError("hand joint_stiffness: " + std::to_string(ks.size()) + " values for " + std::to_string(h.num_q()) +
-                       " joints, expected one per joint or none");
-    for (std::size_t j = 0; j < ks.size(); ++j) {
-      if (std::isfinite(ks[j]) && ks[j] >= 0.0) continue;
-      std::ostringstream os;
-      os << "hand joint_stiffness of joint '" << h.QNames()[j] << "' is " << ks[j] << ", expected >= 0 N m/rad (0: rigid)";
-      throw InputError(os.str());
-    }
-    deflect = m.torque && std::any_of(ks.begin(), ks.end(), [](double k) { return k > 0.0; });
+    ValidateJointStiffness(h);
+    deflect = m.torque && HasElasticJoints(h);
     if (!(options.horizon >= 0.0) || options.history_samples < 1 || options.max_queued_images < 1)
       throw InputError("tracker options: horizon must be >= 0 s, history_samples and max_queued_images >= 1");
     history.Resize(options.history_samples);
@@ -84,16 +75,6 @@ struct Tracker::Impl {
   Eigen::VectorXd q_used;  // the sample as fused (undeflected, clamped to the limits when asked)
   bool deflect = false;    // sets with torques on a hand with joint stiffness
 
-  // The encoder reads the motor side; the link lags it by the external torque over the
-  // stiffness (HandModel::joint_stiffness): q_link = q_recorded − τ / k. τ is finite here:
-  // ScreenJointSample refused the sample otherwise.
-  void Undeflect(const Eigen::Ref<const Eigen::VectorXd>& tau) {
-    for (int j = 0; j < q_used.size(); ++j) {
-      const double k = hand.joint_stiffness[static_cast<std::size_t>(j)];
-      if (k > 0.0) q_used[j] -= tau[j] / k;
-    }
-  }
-
   // --- the caller's side
   void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& tau) {
     INHAND_CHECK(start_set, "Tracker::AddJointSample before Start");
@@ -104,7 +85,7 @@ struct Tracker::Impl {
       ++stats.samples_dropped;
       return;
     }
-    if (ScreenJointSample(hand, params, q, tau).joint >= 0) {
+    if (ScreenJointSample(hand, params.joint_limit_margin, q, tau).joint >= 0) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.samples_rejected;
       return;
@@ -118,7 +99,7 @@ struct Tracker::Impl {
     }
     if (q_used.size() != q.size()) q_used.resize(q.size());  // once
     q_used = q;
-    if (deflect) Undeflect(tau);
+    if (deflect) Undeflect(hand, tau, q_used);
     if (params.joint_clamp_to_limits) ClampToLimits(hand, q_used);
     const double dt = started ? t - last_t : 0.0;
     if (!started) {

@@ -175,27 +175,6 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
   return p;
 }
 
-void ClampToLimits(const HandModel& hand, Eigen::Ref<Eigen::VectorXd> q) {
-  for (int i = 0; i < hand.num_q(); ++i) {
-    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
-    if (joint.has_limits) q[i] = std::clamp(q[i], joint.lower, joint.upper);
-  }
-}
-
-RejectedJoint ScreenJointSample(const HandModel& hand, const TrackerParams& params, const Eigen::Ref<const Eigen::VectorXd>& q,
-                                const Eigen::Ref<const Eigen::VectorXd>& tau) {
-  for (int i = 0; i < hand.num_q(); ++i) {
-    if (!std::isfinite(tau[i])) return {i, true};
-    const double v = q[i];
-    if (!std::isfinite(v)) return {i, false};
-    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
-    const double lo = joint.has_limits ? joint.lower - params.joint_limit_margin : -1000.0;
-    const double hi = joint.has_limits ? joint.upper + params.joint_limit_margin : 1000.0;
-    if (v < lo || v > hi) return {i, false};
-  }
-  return {};
-}
-
 TrackerParams ReadTrackerParams(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open the parameter file");

@@ -59,8 +59,9 @@ class SessionPlayer {
   const TrackerParams& params() const { return params_; }
 
   // What the session holds that the trackers will not use, found when the player is made: joint
-  // samples no hand can produce (dropped), frames captured before the first joint sample
-  // (dropped), ground truth that does not cover every joint sample (no errors there).
+  // samples no hand can produce (dropped; a session none of whose samples can be fused is
+  // refused, InputError), frames captured before the first joint sample (dropped), ground truth
+  // that does not cover every joint sample (no errors there).
   struct InputReport {
     struct Rejected {
       int sample = -1;
@@ -74,6 +75,8 @@ class SessionPlayer {
     int samples_without_truth = 0;
     // One warning line each ("FILE:LINE: ..."), for stderr.
     std::vector<std::string> Warnings(const Session& session, const SessionModels& models, const TrackerParams& params) const;
+    // "FILE:LINE: q:NAME = VALUE is ...": why a sample was rejected.
+    static std::string Describe(const Session& session, const SessionModels& models, const TrackerParams& params, const Rejected& r);
   };
   const InputReport& input_report() const { return report_; }
 

@@ -8,6 +8,7 @@
 #include "inhand/core/hand_model.hpp"
 #include "inhand/features/extracted.hpp"
 #include "inhand/features/tags.hpp"
+#include "inhand/filter/joint_samples.hpp"  // ScreenJointSample, ClampToLimits (joints.*)
 #include "inhand/filter/params.hpp"
 
 namespace inhand {
@@ -44,17 +45,5 @@ std::string TrackerParamsToJson(const TrackerParams& params);
 TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::string& source);
 // Reads a parameter file; InputError naming the file when it cannot be read or a field is wrong.
 TrackerParams ReadTrackerParams(const std::string& path);
-
-// Clamps every joint with limits into them (joints.clamp_to_limits).
-void ClampToLimits(const HandModel& hand, Eigen::Ref<Eigen::VectorXd> q);
-
-// The first joint (configuration index) whose sample must not be fused under `params`, or -1.
-// `torque` tells whether it is the torque (not a number) rather than the position.
-struct RejectedJoint {
-  int joint = -1;
-  bool torque = false;
-};
-RejectedJoint ScreenJointSample(const HandModel& hand, const TrackerParams& params, const Eigen::Ref<const Eigen::VectorXd>& q,
-                                const Eigen::Ref<const Eigen::VectorXd>& tau);
 
 }  // namespace inhand
