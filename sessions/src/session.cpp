@@ -120,11 +120,21 @@ void RequireHeader(const Csv& csv, const std::vector<std::string>& expected) {
   }
 }
 
+// What a session's numbers can mean: a time within about 30 years of its origin (1e9 s; Unix
+// times of today are 1.7e9 s: a recording's times start near 0, FORMAT.md), a position within
+// 10 m of the palm. Beyond that a value is corrupt, and the filter's arithmetic would not stay
+// finite with it.
+constexpr double kMaxTime = 1e9;       // [s]
+constexpr double kMaxDistance = 10.0;  // [m]
+
 // Column 0 of a file's rows, read in order: a finite time that must increase from row to row.
 class TimeColumn {
  public:
   double operator()(const Csv& csv, const CsvRow& row) {
     const double t = ParseNumber(csv, row, 0);
+    if (!(std::abs(t) <= kMaxTime))
+      throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) + " s, expected within +-1e9 s" +
+                       " (times count from the recording's start)");
     if (!(t > prev_))
       throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) +
                        " does not increase (previous " + FormatDouble(prev_) + ")");
@@ -144,6 +154,9 @@ Transform ParsePose(const Csv& csv, const CsvRow& row, std::size_t c) {
   if (std::abs(q.norm() - 1.0) > 1e-3)
     throw InputError(csv.file + ":" + std::to_string(row.line) + ": quaternion (qw, qx, qy, qz) has norm " +
                      FormatDouble(q.norm()) + ", expected 1 ± 1e-3");
+  if (!(p.norm() <= kMaxDistance))
+    throw InputError(csv.file + ":" + std::to_string(row.line) + ": position (px, py, pz) is " + FormatDouble(p.norm()) +
+                     " m from the palm, expected within 10 m");
   return MakeTransform(p, q);
 }
 
@@ -237,6 +250,7 @@ Session Session::Load(const std::string& dir) {
   }
   const jsonf::Field init = root["initial_estimate"];
   info.initial_T_PO = init["T_PO"].Pose();
+  if (!(info.initial_T_PO.translation().norm() <= kMaxDistance)) init["T_PO"]["xyz"].Fail("a position within 10 m of the palm");
   // The ranges that keep the filter's arithmetic finite (StartSigmas::Validate).
   const auto within = [](const jsonf::Field& f, double lo, double hi, const char* expected) {
     const double v = f.Number();

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <array>
+#include <vector>
+
 #include "inhand/core/error.hpp"
 #include "inhand/core/intrinsics.hpp"
 #include "test_support.hpp"
@@ -81,6 +84,31 @@ TEST(Intrinsics, ValidateNamesTheField) {
   K = Camera();
   K.distortion[2] = std::nan("");
   EXPECT_THROW(K.Validate("x"), InputError);
+}
+
+// Distortion that a lens can have passes (the realistic profile's, OpenCV's calibration of a
+// wide lens); coefficients under which the model folds over inside the image, or that are
+// corrupt, are refused with the field: Undistort could not invert them.
+TEST(Intrinsics, ValidateRefusesDistortionThatCannotBeInverted) {
+  Intrinsics K = Camera();
+  for (const std::array<double, 5>& d : std::vector<std::array<double, 5>>{
+           {-0.21, 0.08, 0.001, -0.0007, -0.01}, {-0.35, 0.15, 0.0, 0.0, -0.03}, {0.1, -0.02, 0.0, 0.0, 0.0}, {0, 0, 0, 0, 0}}) {
+    K.distortion = d;
+    EXPECT_NO_THROW(K.Validate("x")) << d[0];
+    // and Undistort does invert them at the image's corner
+    const Vec2 corner(K.width - 0.5, K.height - 0.5);
+    EXPECT_LT((K.Distort(K.Undistort(corner)) - corner).norm(), 1e-3) << d[0];
+  }
+  for (const std::array<double, 5>& d : std::vector<std::array<double, 5>>{
+           {1e6, 0, 0, 0, 0}, {0, 0, 0, 0, -1e6}, {-2.0, 0, 0, 0, 0}, {0, 0, 1e6, 0, 0}, {0, 0, 0, -2.0, 0}}) {
+    K.distortion = d;
+    try {
+      K.Validate("cam.json");
+      ADD_FAILURE() << "accepted " << d[0] << " " << d[2] << " " << d[3] << " " << d[4];
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cam.json: camera intrinsics field 'distortion"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

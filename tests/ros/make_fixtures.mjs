@@ -24,9 +24,11 @@ function image(f, encoding = "rgb8") {
     for (let x = 0; x < S.WIDTH; ++x) data.set(S.pixel(x, y, f), (y * S.WIDTH + x) * 3);
   return { header: header(S.frameStampNs(f), "camera_optical"), height: S.HEIGHT, width: S.WIDTH, encoding, is_bigendian: 0, step: S.WIDTH * 3, data };
 }
-function cameraInfo(ns, width, height) {
-  return { header: header(ns, "camera_optical"), height, width, distortion_model: "plumb_bob", d: S.D, k: S.K,
-    r: [1, 0, 0, 0, 1, 0, 0, 0, 1], p: [60, 0, 31.5, 0, 0, 60, 23.5, 0, 0, 0, 1, 0], binning_x: 0, binning_y: 0,
+// The synthetic camera's intrinsics, for an image `scale` times its size (a camera of that size).
+function cameraInfo(ns, width, height, scale = 1) {
+  const k = S.K.map((v, i) => (i < 6 ? v * scale : v));
+  return { header: header(ns, "camera_optical"), height, width, distortion_model: "plumb_bob", d: S.D, k,
+    r: [1, 0, 0, 0, 1, 0, 0, 0, 1], p: [k[0], 0, k[2], 0, 0, k[4], k[5], 0, 0, 0, 1, 0], binning_x: 0, binning_y: 0,
     roi: { x_offset: 0, y_offset: 0, height: 0, width: 0, do_rectify: false } };
 }
 
@@ -66,7 +68,7 @@ export function messages() {
   }
   // Bad-input material: a camera whose info disagrees with its images, and an unsupported encoding.
   m.push({ topic: "/camera2/image_raw", type: "sensor_msgs/msg/Image", log: S.frameStampNs(0) + 4000000, msg: image(0) });
-  m.push({ topic: "/camera2/camera_info", type: "sensor_msgs/msg/CameraInfo", log: S.frameStampNs(0) + 4000000, msg: cameraInfo(S.frameStampNs(0), 640, 480) });
+  m.push({ topic: "/camera2/camera_info", type: "sensor_msgs/msg/CameraInfo", log: S.frameStampNs(0) + 4000000, msg: cameraInfo(S.frameStampNs(0), 640, 480, 10) });
   m.push({ topic: "/camera3/image_raw", type: "sensor_msgs/msg/Image", log: S.frameStampNs(0) + 4000000, msg: image(0, "yuv422") });
   m.push({ topic: "/camera3/camera_info", type: "sensor_msgs/msg/CameraInfo", log: S.frameStampNs(0) + 4000000, msg: cameraInfo(S.frameStampNs(0), S.WIDTH, S.HEIGHT) });
   m.sort((a, b) => a.log - b.log);

@@ -240,6 +240,30 @@ TEST_F(BadSession, ImpossibleIntrinsics) {
   ExpectError({"session.json", "'fx'"});
 }
 
+// Numbers no recording can hold are refused by name, not carried into the filter: a camera
+// 1e300 m away, a time of 1e300 s, an initial pose 1e300 m off, distortion of 1e6.
+TEST_F(BadSession, AbsurdMagnitudes) {
+  const std::string camera = test::ReadFile(path_ + "/camera.csv"), joints = test::ReadFile(path_ + "/joints.csv"),
+                    json = test::ReadFile(path_ + "/session.json");
+  const auto restore = [&] {
+    std::ofstream(path_ + "/camera.csv") << camera;
+    std::ofstream(path_ + "/joints.csv") << joints;
+    std::ofstream(path_ + "/session.json") << json;
+  };
+  Replace("camera.csv", "(\n[^,]*,[^,]*,)[^,]*,", "$011e300,");
+  ExpectError({"camera.csv:2", "position (px, py, pz)", "within 10 m"});
+  restore();
+  Replace("joints.csv", "\n0.005,", "\n1e300,");
+  ExpectError({"joints.csv:7", "time 1e+300 s", "within +-1e9 s"});
+  restore();
+  Replace("session.json", "\"xyz\": \\[\\s*[^,\\]]*", "\"xyz\": [1e300");
+  ExpectError({"session.json", "initial_estimate.T_PO.xyz", "within 10 m of the palm"});
+  restore();
+  Session::Load(path_);  // restored: accepted again
+  Replace("session.json", "\"fx\": 60.0", "\"fx\": 60.0, \"distortion\": [1e6, 0, 0, 0, 0]");
+  ExpectError({"session.json", "'distortion'", "inverted"});
+}
+
 TEST_F(BadSession, NonUnitQuaternion) {
   Replace("groundtruth.csv", "\n0.003,([^,]*),([^,]*),([^,]*),([^,]*),", "\n0.003,$1,$2,$3,3,");
   ExpectError({"groundtruth.csv:5", "norm"});

@@ -1,5 +1,6 @@
 #include "inhand/core/intrinsics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -28,6 +29,32 @@ void Intrinsics::Validate(const std::string& context) const {
   for (std::size_t i = 0; i < distortion.size(); ++i) {
     Require(std::isfinite(distortion[i]), context, "distortion[" + std::to_string(i) + "]",
             distortion[i], "a finite value");
+  }
+  // The model means a lens only where it can be inverted: the distorted radius r (1 + k1 r² +
+  // k2 r⁴ + k3 r⁶) must grow with the undistorted radius r until it has passed the image's
+  // farthest corner (normalised), and there differ from r by less than a factor of 2 (beyond,
+  // the lens is a fisheye, which this model does not describe). Tangential terms of real lenses
+  // are thousandths.
+  const auto& [k1, k2, p1, p2, k3] = distortion;
+  Require(std::abs(p1) <= 1.0, context, "distortion[2]", p1, "p1 in [-1, 1]");
+  Require(std::abs(p2) <= 1.0, context, "distortion[3]", p2, "p2 in [-1, 1]");
+  const double corner = std::hypot(std::max(cx + 0.5, width - 0.5 - cx) / fx, std::max(cy + 0.5, height - 0.5 - cy) / fy);
+  // Walks r outwards (steps of 1e-3, up to 10) to where r_d reaches the corner.
+  bool covers = false;
+  for (int i = 0; i <= 10000; ++i) {
+    const double r = 1e-3 * i, r2 = r * r;
+    if (!(1.0 + r2 * (3.0 * k1 + r2 * (5.0 * k2 + r2 * 7.0 * k3)) > 0.0)) break;  // d(r_d)/dr: folds over
+    const double factor = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    if (r * factor < corner) continue;
+    covers = factor >= 0.5 && factor <= 2.0;
+    break;
+  }
+  if (!covers) {
+    std::ostringstream os;
+    os << context << ": camera intrinsics field 'distortion' is (" << k1 << ", " << k2 << ", " << p1 << ", " << p2 << ", " << k3
+       << "), expected a radial distortion that can be inverted over the whole image (r (1 + k1 r^2 + k2 r^4 + k3 r^6)"
+       << " growing with r up to the corner's normalised radius " << corner << ", there within a factor of 2 of r)";
+    throw InputError(os.str());
   }
 }
 
