@@ -1,4 +1,4 @@
-// The constraint both kinds of contact apply (estimator-math.md, "Kinematic update"):
+// The constraint both kinds of contact apply (docs/estimator.md, "Contacts"):
 // h = c_f - c_o, z = 0, so r = c_o - c_f and H = [-A(c_o), J(c_f)] (zero for the camera
 // error). Normal-only by default: a closest-point pair observes the distance along its normal,
 // not where along the surface the contact sits.

@@ -1,4 +1,4 @@
-// Kinematic contacts (estimator-math.md, "Kinematic update"): every link that penetrates the
+// Kinematic contacts (docs/estimator.md, "Contacts"): every link that penetrates the
 // object at the estimate is a zero-distance constraint. This file runs the contact step: query
 // the pairs at the estimate, classify each (penetrating here, torque-confirmed in
 // torque_contacts.cpp), apply the constraints (contact_constraint.cpp) and keep the contacts

@@ -1,6 +1,6 @@
 #pragma once
 // Extracted features, the paper's five steps between the camera image and the virtual image
-// rendered at the current estimate (estimator-math.md, "Visual update"), and optionally a step
+// rendered at the current estimate (docs/estimator.md, "Vision"), and optionally a step
 // before them that finds the whole object far off (global_search_radius):
 //   0. one shift of the object       → the virtual object's edges placed on the camera's edges
 //                                          by an oriented chamfer over a wide window; the

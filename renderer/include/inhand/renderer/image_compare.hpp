@@ -1,5 +1,5 @@
 #pragma once
-// Image regression: two numbers decide (style.md): the largest per-channel difference, and the
+// Image regression: two numbers decide: the largest per-channel difference, and the
 // fraction of pixels whose difference exceeds a tolerance. A heat map shows where.
 #include "inhand/core/image.hpp"
 

@@ -2,7 +2,7 @@
 // ContactQuery with Bullet's GJK (btGjkPairDetector) and EPA (btGjkEpaPenetrationDepthSolver)
 // in double precision. Shapes are built once from the models; a query only moves transforms.
 // Exact shapes: spheres and capsules natively, boxes and hulls as convex hulls with a small
-// margin that is subtracted again (dependencies.md: EPA is unreliable on coplanar faces
+// margin that is subtracted again (docs/dependencies.md: EPA is unreliable on coplanar faces
 // without margin), cylinders natively with a 0.1 mm rounding of their rims.
 //
 // An object with a distance field (ObjectModel::field: a scan's closed surface or the union of

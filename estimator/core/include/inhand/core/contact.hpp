@@ -1,5 +1,5 @@
 #pragma once
-// Contact queries between the hand's links and the object (estimator-math.md, "Contacts").
+// Contact queries between the hand's links and the object (docs/estimator.md, "Contacts").
 // The filter sees only this interface; estimator/contacts implements it with Bullet's GJK/EPA.
 #include <vector>
 

@@ -1,5 +1,5 @@
 #pragma once
-// Error tiers (style.md, practice 5):
+// Error tiers:
 //  - InputError: bad user input or files. The message names the file, line or field and what
 //    was expected. Callers (the CLI) print it and exit non-zero.
 //  - INHAND_CHECK: broken invariants. Always on; aborts with file:line and the condition.

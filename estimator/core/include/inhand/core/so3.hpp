@@ -1,6 +1,6 @@
 #pragma once
 // SO(3)/SE(3) helpers. Rotations act on the left: R_AB maps coordinates in B to A.
-// Exp/Log follow estimator-math.md: R = Exp(δθ) R̂ with δθ expressed in the outer frame.
+// Exp/Log follow docs/estimator.md: R = Exp(δθ) R̂ with δθ expressed in the outer frame.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 

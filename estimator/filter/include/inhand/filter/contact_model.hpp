@@ -1,5 +1,5 @@
 #pragma once
-// The kinematic pieces of the paper's models (estimator-math.md), as small testable functions.
+// The kinematic pieces of the paper's models (docs/estimator.md), as small testable functions.
 #include "inhand/core/intrinsics.hpp"
 #include "inhand/core/so3.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// The error-state EKF of estimator-math.md: mean (p, R, b), error δ = (δp, δθ, δb) ∈ R^(6+m),
+// The error-state EKF of docs/estimator.md: mean (p, R, b), error δ = (δp, δθ, δb) ∈ R^(6+m),
 // R = Exp(δθ) R̂ (plus the camera pose's error ξ when it is estimated). Predict maps finger
 // motion to object motion through the grasp map of the active contacts; UpdateContacts removes
 // penetrations and adds torque-confirmed contacts; UpdateVisual aligns the object with pixels.
@@ -69,7 +69,7 @@ struct VisualFeature {
   Vec2 pixel = Vec2::Zero();        // measured pixel, undistorted [px]
 };
 
-// The standard deviations the filter starts with (estimator-math.md, "Initialisation").
+// The standard deviations the filter starts with (docs/estimator.md, "State").
 struct StartSigmas {
   double position = 0.020;                 // [m] per axis
   double orientation = 5.0 * M_PI / 180;   // [rad] per axis
