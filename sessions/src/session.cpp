@@ -413,6 +413,7 @@ std::vector<Session::LimitViolation> Session::LimitViolations(const HandModel& h
 std::vector<std::string> Session::LimitWarnings(const HandModel& hand, const std::vector<int>& columns) const {
   std::vector<std::string> out;
   for (const LimitViolation& v : LimitViolations(hand, columns)) {
+    if (std::abs(v.worst - v.limit) <= info_.sigma_joint_bias) continue;  // what the encoders may be off by
     std::ostringstream line;
     line << Resolve("joints.csv") << ": q:" << v.joint << " beyond its ";
     if (v.below > 0 && v.above > 0) line << "limits in " << v.below << " (below) and " << v.above << " (above)";

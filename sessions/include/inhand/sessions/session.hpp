@@ -89,7 +89,10 @@ class Session {
   };
   std::vector<LimitViolation> LimitViolations(const HandModel& hand, const std::vector<int>& columns) const;
   // One warning line per such joint: "DIR/joints.csv: q:NAME beyond its upper limit L in N of M
-  // samples (worst W, by D)".
+  // samples (worst W, by D)", for the joints whose worst sample passes its limit by more than
+  // the session's declared joint-bias σ (sigma_joint_bias): an encoder that is off by that much
+  // reads beyond the limit when its joint rests on it (the simulator's index_flex2, 2.2° below 0
+  // in the demo session), which says nothing about the recording.
   std::vector<std::string> LimitWarnings(const HandModel& hand, const std::vector<int>& columns) const;
 
  private:
