@@ -14,10 +14,10 @@
 
 #include "inhand/app/commands.hpp"
 #include "inhand/app/modalities.hpp"
-#include "inhand/io/object_loader.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/filter/contact_model.hpp"
 #include "inhand/io/detail/json_fields.hpp"
+#include "inhand/io/object_loader.hpp"
 #include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/overlay.hpp"
 #include "inhand/sessions/output_folder.hpp"
@@ -38,10 +38,14 @@ struct PaperCell {
 };
 const std::map<std::string, std::map<std::string, PaperCell>>& PaperTable() {
   static const std::map<std::string, std::map<std::string, PaperCell>> table = {
-      {"ketchup-power-grasp", {{"j", {29.3, 22.9}}, {"jt", {26.6, 9.0}}, {"jta", {20.2, 7.0}}, {"jtf", {11.1, 11.2}}}},
-      {"brush-rotation", {{"j", {37.6, 26.5}}, {"jt", {22.7, 10.8}}, {"jta", {13.5, 10.1}}, {"jtf", {13.7, 11.1}}}},
-      {"water-push-grasp", {{"j", {28.6, 19.9}}, {"jt", {22.4, 9.5}}, {"jta", {16.0, 11.2}}, {"jtf", {17.4, 26.9}}}},
-      {"shampoo-grasp", {{"j", {34.4, 22.1}}, {"jt", {15.9, 14.7}}, {"jta", {8.4, 6.8}}, {"jtf", {8.5, 10.4}}}},
+      {"ketchup-power-grasp",
+       {{"j", {29.3, 22.9}}, {"jt", {26.6, 9.0}}, {"jta", {20.2, 7.0}}, {"jtf", {11.1, 11.2}}}},
+      {"brush-rotation",
+       {{"j", {37.6, 26.5}}, {"jt", {22.7, 10.8}}, {"jta", {13.5, 10.1}}, {"jtf", {13.7, 11.1}}}},
+      {"water-push-grasp",
+       {{"j", {28.6, 19.9}}, {"jt", {22.4, 9.5}}, {"jta", {16.0, 11.2}}, {"jtf", {17.4, 26.9}}}},
+      {"shampoo-grasp",
+       {{"j", {34.4, 22.1}}, {"jt", {15.9, 14.7}}, {"jta", {8.4, 6.8}}, {"jtf", {8.5, 10.4}}}},
   };
   return table;
 }
@@ -52,13 +56,16 @@ std::string RunDir(const std::string& out, const std::string& scenario, int seed
   return (fs::path(out) / "runs" / (scenario + "-seed" + std::to_string(seed))).string();
 }
 
-std::string RunCommand(const std::string& self, const std::string& out, const std::string& scenario, int seed,
-                       const std::string& noise, const std::string& modalities, bool keep, const std::string& params) {
+std::string RunCommand(const std::string& self, const std::string& out, const std::string& scenario,
+                       int seed, const std::string& noise, const std::string& modalities, bool keep,
+                       const std::string& params) {
   const std::string dir = RunDir(out, scenario, seed);
-  std::string c = Quote(self) + " simulate " + scenario + " --seed " + std::to_string(seed) + " --noise " + noise +
-                  " --overwrite --out " + Quote(dir + "/session") + " > " + Quote(dir + "/log.txt") + " 2>&1 && " +
-                  Quote(self) + " replay " + Quote(dir + "/session") + " --modalities " + Quote(modalities) + (params.empty() ? std::string() : " --params " + Quote(params)) + " --no-video --out " + Quote(dir + "/replay") +
-                  " >> " + Quote(dir + "/log.txt") + " 2>&1";
+  std::string c =
+      Quote(self) + " simulate " + scenario + " --seed " + std::to_string(seed) + " --noise " +
+      noise + " --overwrite --out " + Quote(dir + "/session") + " > " + Quote(dir + "/log.txt") +
+      " 2>&1 && " + Quote(self) + " replay " + Quote(dir + "/session") + " --modalities " +
+      Quote(modalities) + (params.empty() ? std::string() : " --params " + Quote(params)) +
+      " --no-video --out " + Quote(dir + "/replay") + " >> " + Quote(dir + "/log.txt") + " 2>&1";
   if (!keep) c += " && rm -rf " + Quote(dir + "/session/images");
   return "mkdir -p " + Quote(dir) + " && " + c;
 }
@@ -78,10 +85,10 @@ Stat Stats(const std::vector<double>& v) {
   return s;
 }
 
-
 // Fig. 7: change of x, y, z [mm] and roll, pitch, yaw [deg] over time (truth dashed black,
 // each set in its colour), from one run; and the terminal errors of all runs as bars.
-void PlotScenario(const std::string& scenario, const std::string& run_dir, const std::map<std::string, std::pair<Stat, Stat>>& bars,
+void PlotScenario(const std::string& scenario, const std::string& run_dir,
+                  const std::map<std::string, std::pair<Stat, Stat>>& bars,
                   const std::string& path) {
   // Truth and estimates of the first seed.
   std::map<std::string, std::vector<std::pair<double, Vec6>>> series;  // set -> (t, pose6)
@@ -97,8 +104,11 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
   std::getline(gt, line);
   while (std::getline(gt, line)) {
     double v[8];
-    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &v[7]) != 8) continue;
-    series["truth"].emplace_back(v[0], pose6(MakeTransform(Vec3(v[1], v[2], v[3]), Quat(v[4], v[5], v[6], v[7]))));
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3],
+                    &v[4], &v[5], &v[6], &v[7]) != 8)
+      continue;
+    series["truth"].emplace_back(
+        v[0], pose6(MakeTransform(Vec3(v[1], v[2], v[3]), Quat(v[4], v[5], v[6], v[7]))));
   }
   std::ifstream in(run_dir + "/replay/estimates.csv");
   std::getline(in, line);
@@ -108,8 +118,9 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
     std::vector<std::string> f;
     while (std::getline(ss, cell, ',')) f.push_back(cell);
     if (f.size() < 9) continue;
-    const Transform T = MakeTransform(Vec3(std::stod(f[2]), std::stod(f[3]), std::stod(f[4])),
-                                      Quat(std::stod(f[5]), std::stod(f[6]), std::stod(f[7]), std::stod(f[8])));
+    const Transform T =
+        MakeTransform(Vec3(std::stod(f[2]), std::stod(f[3]), std::stod(f[4])),
+                      Quat(std::stod(f[5]), std::stod(f[6]), std::stod(f[7]), std::stod(f[8])));
     series[f[1]].emplace_back(std::stod(f[0]), pose6(T));
   }
   const int W = 1500, H = 900, cols = 3;
@@ -129,14 +140,18 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
     const double pad = 0.08 * (hi - lo);
     lo -= pad, hi += pad;
     cv::rectangle(img, box, cv::Scalar(120, 120, 120), 1);
-    cv::putText(img, std::string("change in ") + names[a], cv::Point(box.x, box.y - 8), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(img, std::string("change in ") + names[a], cv::Point(box.x, box.y - 8),
+                cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     std::ostringstream lo_s, hi_s;
     lo_s << std::fixed << std::setprecision(1) << lo;
     hi_s << std::fixed << std::setprecision(1) << hi;
-    cv::putText(img, hi_s.str(), cv::Point(box.x - 55, box.y + 10), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
-    cv::putText(img, lo_s.str(), cv::Point(box.x - 55, box.y + box.height), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
+    cv::putText(img, hi_s.str(), cv::Point(box.x - 55, box.y + 10), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
+    cv::putText(img, lo_s.str(), cv::Point(box.x - 55, box.y + box.height),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
     const auto to_px = [&](double t, double v) {
-      return cv::Point(box.x + static_cast<int>((t - t0) / (t1 - t0) * box.width), box.y + box.height - static_cast<int>((v - lo) / (hi - lo) * box.height));
+      return cv::Point(box.x + static_cast<int>((t - t0) / (t1 - t0) * box.width),
+                       box.y + box.height - static_cast<int>((v - lo) / (hi - lo) * box.height));
     };
     std::vector<std::string> order;  // every set, then the truth on top
     for (const auto& entry : series)
@@ -153,27 +168,33 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
         double d = v[a] - start[a];
         if (a >= 3) d = std::remainder(d, 360.0);
         const cv::Point q = to_px(t, d);
-        if (prev.x >= 0 && (set != "truth" || (k / 6) % 2 == 0)) cv::line(img, prev, q, col, set == "truth" ? 2 : 1, cv::LINE_AA);
+        if (prev.x >= 0 && (set != "truth" || (k / 6) % 2 == 0))
+          cv::line(img, prev, q, col, set == "truth" ? 2 : 1, cv::LINE_AA);
         prev = q;
         ++k;
       }
     }
-    cv::putText(img, "t [s]", cv::Point(box.x + box.width - 30, box.y + box.height + 16), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
+    cv::putText(img, "t [s]", cv::Point(box.x + box.width - 30, box.y + box.height + 16),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
   }
   // Bars: mean ± std terminal errors of all seeds.
   int x = 60;
   const int base = 880, scale_mm = 4, scale_deg = 4;
-  cv::putText(img, scenario + ": terminal errors over all seeds (left mm, right deg; paper colours)", cv::Point(60, 615),
-              cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(
+      img, scenario + ": terminal errors over all seeds (left mm, right deg; paper colours)",
+      cv::Point(60, 615), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   for (const auto& [set, st] : bars) {
     const Rgb c = ModalityColour(set);
     const cv::Scalar col(c.r, c.g, c.b);
-    const int hp = std::min(240, static_cast<int>(st.first.mean * scale_mm)), ho = std::min(240, static_cast<int>(st.second.mean * scale_deg));
+    const int hp = std::min(240, static_cast<int>(st.first.mean * scale_mm)),
+              ho = std::min(240, static_cast<int>(st.second.mean * scale_deg));
     cv::rectangle(img, cv::Rect(x, base - hp, 30, hp), col, cv::FILLED);
     cv::rectangle(img, cv::Rect(x + 34, base - ho, 30, ho), col, 1);
     std::ostringstream label;
-    label << set << ": " << std::fixed << std::setprecision(1) << st.first.mean << " mm, " << st.second.mean << " deg";
-    cv::putText(img, label.str(), cv::Point(x, base + 14), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    label << set << ": " << std::fixed << std::setprecision(1) << st.first.mean << " mm, "
+          << st.second.mean << " deg";
+    cv::putText(img, label.str(), cv::Point(x, base + 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     x += 300;
   }
   Image8 out(W, H, 3);
@@ -185,10 +206,13 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir, const
 
 int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
   if (cmd.out.empty()) throw InputError("evaluate: --out DIR is required");
-  if (cmd.seeds < 1 || cmd.seeds > 1000) throw InputError("--seeds is " + std::to_string(cmd.seeds) + ", expected 1..1000");
-  if (cmd.first_seed < 1 || cmd.first_seed > 1000000) throw InputError("--first-seed is " + std::to_string(cmd.first_seed) + ", expected 1..1000000");
+  if (cmd.seeds < 1 || cmd.seeds > 1000)
+    throw InputError("--seeds is " + std::to_string(cmd.seeds) + ", expected 1..1000");
+  if (cmd.first_seed < 1 || cmd.first_seed > 1000000)
+    throw InputError("--first-seed is " + std::to_string(cmd.first_seed) + ", expected 1..1000000");
   const int last_seed = cmd.first_seed + cmd.seeds - 1;
-  if (cmd.jobs < 1 || cmd.jobs > 64) throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
+  if (cmd.jobs < 1 || cmd.jobs > 64)
+    throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
   ParseNoiseProfile(cmd.noise);
   std::vector<std::string> scenarios;
   if (cmd.scenarios.empty()) {
@@ -199,8 +223,10 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
     std::vector<std::string> known;
     for (const ScenarioInfo& i : ListScenarios()) known.push_back(i.name);
     while (std::getline(ss, s, ','))
-      if (std::find(known.begin(), known.end(), s) == known.end()) throw InputError("--scenarios: unknown scenario '" + s + "'");
-      else scenarios.push_back(s);
+      if (std::find(known.begin(), known.end(), s) == known.end())
+        throw InputError("--scenarios: unknown scenario '" + s + "'");
+      else
+        scenarios.push_back(s);
   }
   ParseModalities(cmd.modalities);  // an unknown set is an error before anything is written
   std::string params;
@@ -213,7 +239,8 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
   const fs::path out_dir = CheckOutputFolder(cmd.out);
   fs::create_directories(out_dir);
   std::ofstream(out_dir / kOutputMarker) << "written by inhand evaluate\n";
-  std::vector<std::pair<std::string, std::pair<std::string, int>>> runs;  // command, (scenario, seed)
+  std::vector<std::pair<std::string, std::pair<std::string, int>>>
+      runs;  // command, (scenario, seed)
   // Sets with tags (a) only where the scenario's object carries tags (the pen has none).
   std::map<std::string, std::string> sets_of;
   for (const ScenarioInfo& info : ListScenarios()) {
@@ -226,17 +253,25 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       std::string& to = (m.tags && !tags) ? dropped : list;
       to += (to.empty() ? "" : ",") + m.name;
     }
-    if (!dropped.empty()) std::cerr << "evaluate: " << info.name << ": " << dropped << " left out (the object has no AprilTags)\n";
-    if (list.empty()) throw InputError("--modalities: no set can run on " + info.name + " (its object has no AprilTags)");
+    if (!dropped.empty())
+      std::cerr << "evaluate: " << info.name << ": " << dropped
+                << " left out (the object has no AprilTags)\n";
+    if (list.empty())
+      throw InputError("--modalities: no set can run on " + info.name +
+                       " (its object has no AprilTags)");
     sets_of[info.name] = list;
   }
   for (const std::string& s : scenarios)
-    for (int seed = cmd.first_seed; seed <= last_seed; ++seed) runs.push_back({RunCommand(self, cmd.out, s, seed, cmd.noise, sets_of.at(s), cmd.keep_sessions, params), {s, seed}});
+    for (int seed = cmd.first_seed; seed <= last_seed; ++seed)
+      runs.push_back(
+          {RunCommand(self, cmd.out, s, seed, cmd.noise, sets_of.at(s), cmd.keep_sessions, params),
+           {s, seed}});
   if (cmd.plan) {
     std::ofstream plan(fs::path(cmd.out) / "plan.txt");
     for (const auto& r : runs) plan << r.first << "\n";
     std::cout << runs.size() << " runs written to " << (fs::path(cmd.out) / "plan.txt").string()
-              << "; run them (e.g. parallel < plan.txt), then: inhand evaluate --out " << cmd.out << " --merge\n";
+              << "; run them (e.g. parallel < plan.txt), then: inhand evaluate --out " << cmd.out
+              << " --merge\n";
     return 0;
   }
   if (!cmd.merge) {
@@ -257,7 +292,8 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       if (::wait(&status) > 0) {
         --running;
         failed += !(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-        std::cerr << "\revaluate: " << (next - static_cast<std::size_t>(running)) << "/" << runs.size() << " runs done" << std::flush;
+        std::cerr << "\revaluate: " << (next - static_cast<std::size_t>(running)) << "/"
+                  << runs.size() << " runs done" << std::flush;
       }
     }
     std::cerr << "\n";
@@ -266,10 +302,13 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
   // Merge: Table I with the paper's values beside ours.
   Json table = Json::object();
   std::ostringstream md;
-  md << "# Table I: terminal errors, mean ± std over seeds " << cmd.first_seed << "-" << last_seed << " (" << cmd.noise << " noise)\n\n"
-     << "Position [mm] and orientation [deg] at the end of each run; the paper's values in brackets.\n"
+  md << "# Table I: terminal errors, mean ± std over seeds " << cmd.first_seed << "-" << last_seed
+     << " (" << cmd.noise << " noise)\n\n"
+     << "Position [mm] and orientation [deg] at the end of each run; the paper's values in "
+        "brackets.\n"
      << "NEES: mean normalised estimation error squared of the 6-D pose (consistent filter: 6).\n\n"
-     << "| scenario | set | runs | position [mm] | orientation [deg] | NEES mean |\n| --- | --- | --- | --- | --- | --- |\n";
+     << "| scenario | set | runs | position [mm] | orientation [deg] | NEES mean |\n| --- | --- | "
+        "--- | --- | --- | --- |\n";
   for (const std::string& s : scenarios) {
     std::map<std::string, std::vector<double>> pos, ori, nees;
     for (int seed = cmd.first_seed; seed <= last_seed; ++seed) {
@@ -289,8 +328,12 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       if (!pos.count(set)) continue;
       const Stat p = Stats(pos[set]), o = Stats(ori[set]), n = Stats(nees[set]);
       bars[set] = {p, o};
-      Json cell = {{"runs", p.n}, {"position_mm_mean", p.mean}, {"position_mm_std", p.std}, {"orientation_deg_mean", o.mean},
-                   {"orientation_deg_std", o.std}, {"nees_mean", n.mean}};
+      Json cell = {{"runs", p.n},
+                   {"position_mm_mean", p.mean},
+                   {"position_mm_std", p.std},
+                   {"orientation_deg_mean", o.mean},
+                   {"orientation_deg_std", o.std},
+                   {"nees_mean", n.mean}};
       std::ostringstream ps, os;
       ps << std::fixed << std::setprecision(1) << p.mean << " ± " << p.std;
       os << std::fixed << std::setprecision(1) << o.mean << " ± " << o.std;
@@ -304,10 +347,12 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
         os << " (" << pc.deg << ")";
       }
       table[s][set] = cell;
-      md << "| " << s << " | " << set << " | " << p.n << " | " << ps.str() << " | " << os.str() << " | " << std::fixed << std::setprecision(0) << n.mean << " |\n";
+      md << "| " << s << " | " << set << " | " << p.n << " | " << ps.str() << " | " << os.str()
+         << " | " << std::fixed << std::setprecision(0) << n.mean << " |\n";
     }
     const std::string first = RunDir(cmd.out, s, cmd.first_seed);
-    if (fs::exists(fs::path(first) / "replay/estimates.csv") && fs::exists(fs::path(first) / "session/groundtruth.csv"))
+    if (fs::exists(fs::path(first) / "replay/estimates.csv") &&
+        fs::exists(fs::path(first) / "session/groundtruth.csv"))
       PlotScenario(s, first, bars, (fs::path(cmd.out) / ("fig7_" + s + ".png")).string());
   }
   std::ofstream(fs::path(cmd.out) / "table1.md") << md.str();

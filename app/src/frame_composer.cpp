@@ -14,11 +14,15 @@ namespace {
 
 OverlayContact::Kind Kind(ContactKind k) {
   switch (k) {
-    case ContactKind::kKinematic: return OverlayContact::Kind::kKinematic;
-    case ContactKind::kTorque: return OverlayContact::Kind::kTorque;
+    case ContactKind::kKinematic:
+      return OverlayContact::Kind::kKinematic;
+    case ContactKind::kTorque:
+      return OverlayContact::Kind::kTorque;
     case ContactKind::kRejectedCone:
-    case ContactKind::kRejectedForce: return OverlayContact::Kind::kRejected;
-    case ContactKind::kCandidate: break;
+    case ContactKind::kRejectedForce:
+      return OverlayContact::Kind::kRejected;
+    case ContactKind::kCandidate:
+      break;
   }
   return OverlayContact::Kind::kCandidate;
 }
@@ -34,12 +38,14 @@ std::string HudLine(const std::string& name, const PictureState::Set& set) {
   const EstimateRecord& r = set.record;
   std::ostringstream line;
   line << std::fixed << std::setprecision(1) << name << ": ";
-  if (std::isfinite(r.position_error)) line << r.position_error * 1000 << " mm / " << r.orientation_error * 180 / M_PI << " deg, ";
+  if (std::isfinite(r.position_error))
+    line << r.position_error * 1000 << " mm / " << r.orientation_error * 180 / M_PI << " deg, ";
   line << "sigma " << LargestSigma(set.pose_covariance.topLeftCorner<3, 3>()) * 1000 << " mm / "
        << LargestSigma(set.pose_covariance.block<3, 3>(3, 3)) * 180 / M_PI << " deg, ";
   line << r.constraints << (r.constraints == 1 ? " constraint" : " constraints");
   if (set.found_again > 0.0) line << ", found again " << set.found_again * 1000 << " mm away";
-  if (r.memory.features_lost()) line << ", object not matched in " << r.memory.features_poor_frames << " frames";
+  if (r.memory.features_lost())
+    line << ", object not matched in " << r.memory.features_poor_frames << " frames";
   if (r.memory.tag_disagreements > 0) line << ", tags see it elsewhere";
   if (r.slipping) line << ", grip loosened";
   return line.str();
@@ -47,7 +53,8 @@ std::string HudLine(const std::string& name, const PictureState::Set& set) {
 
 FrameComposer::FrameComposer(const SessionPlayer& player) : p_(player) {
   hand_meshes_ = UploadHand(renderer_, p_.models().hand);
-  object_meshes_ = UploadObject(renderer_, p_.models().object, PrintedTagMeshes(p_.models().object));
+  object_meshes_ =
+      UploadObject(renderer_, p_.models().object, PrintedTagMeshes(p_.models().object));
   painter_ = std::make_unique<OverlayPainter>(renderer_, object_meshes_);
 }
 
@@ -56,7 +63,9 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
   st.t = t;
   st.camera_frame = camera_frame;
   if (camera_frame >= 0)
-    st.camera = p.last_frame() == camera_frame && !p.last_image().empty() ? p.last_image() : p.session().LoadImage(camera_frame);
+    st.camera = p.last_frame() == camera_frame && !p.last_image().empty()
+                    ? p.last_image()
+                    : p.session().LoadImage(camera_frame);
   for (std::size_t i = 0; i < p.sets().size(); ++i) {
     const Filter& f = p.tracker(i).filter();
     PictureState::Set set;
@@ -65,7 +74,8 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
     set.contacts = f.trace().contacts;
     set.visual = f.trace().visual;
     const TrackerStats stats = p.tracker(i).stats();
-    if (stats.relocalizations > 0 && stats.last_relocalization_t <= t && t - stats.last_relocalization_t <= 1.0)
+    if (stats.relocalizations > 0 && stats.last_relocalization_t <= t &&
+        t - stats.last_relocalization_t <= 1.0)
       set.found_again = stats.last_relocalized;
     st.sets.push_back(std::move(set));
   }
@@ -74,7 +84,8 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
   if (camera_frame >= 0 && p.sets()[last].features) {
     const VisualStep& v = p.tracker(last).last_visual();
     const double t_frame = p.session().camera_frames().at(static_cast<std::size_t>(camera_frame)).t;
-    if (v.sequence > 0 && v.has_features && v.t_capture == t_frame) st.matched_view = v.virtual_view.colour;
+    if (v.sequence > 0 && v.has_features && v.t_capture == t_frame)
+      st.matched_view = v.virtual_view.colour;
   }
   return st;
 }
@@ -82,13 +93,22 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
 void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const {
   const Session& s = p_.session();
   if (s.has_groundtruth())
-    of->estimates.push_back({"truth", kColourTruth, s.GroundTruthAt(st.t), Mat3::Zero(), true, {}, {}});
+    of->estimates.push_back(
+        {"truth", kColourTruth, s.GroundTruthAt(st.t), Mat3::Zero(), true, {}, {}});
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const PictureState::Set& set = st.sets[i];
     const EstimateRecord& r = set.record;
-    OverlayEstimate e{p_.sets()[i].name, p_.sets()[i].colour, r.T_PO, set.pose_covariance.topLeftCorner<3, 3>(), false, {}, {}};
-    for (const FilterTrace::Contact& c : set.contacts) e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
-    for (const FilterTrace::Visual& v : set.visual) e.features.push_back({v.measured, v.predicted, !v.gated});
+    OverlayEstimate e{p_.sets()[i].name,
+                      p_.sets()[i].colour,
+                      r.T_PO,
+                      set.pose_covariance.topLeftCorner<3, 3>(),
+                      false,
+                      {},
+                      {}};
+    for (const FilterTrace::Contact& c : set.contacts)
+      e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
+    for (const FilterTrace::Visual& v : set.visual)
+      e.features.push_back({v.measured, v.predicted, !v.gated});
     of->estimates.push_back(e);
     of->hud.push_back(HudLine(p_.sets()[i].name, set));
   }
@@ -101,7 +121,8 @@ Scene FrameComposer::ExternalScene(const PictureState& st, const Intrinsics& K) 
   outside.background = Vec3(0.93, 0.94, 0.96);
   const Aabb box = p_.models().object.Bounds();
   const Vec3 centre = st.sets.back().record.T_PO * box.Center();
-  outside.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), orbit.distance, orbit.azimuth, orbit.elevation, Vec3::UnitY());
+  outside.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), orbit.distance, orbit.azimuth,
+                             orbit.elevation, Vec3::UnitY());
   AddHand(outside, hand_meshes_, st.link_poses, 1.0, true);
   if (s.has_groundtruth()) {
     ObjectStyle truth;
@@ -119,7 +140,8 @@ Scene FrameComposer::ExternalScene(const PictureState& st, const Intrinsics& K) 
 
 Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layers) {
   const Session& s = p_.session();
-  INHAND_CHECK(st.camera_frame >= 0 && !st.camera.empty(), "FrameComposer::Compose without a camera frame");
+  INHAND_CHECK(st.camera_frame >= 0 && !st.camera.empty(),
+               "FrameComposer::Compose without a camera frame");
   const CameraFrame& frame = s.camera_frames().at(static_cast<std::size_t>(st.camera_frame));
   const Intrinsics& K = *s.info().camera;
   OverlayFrame of;
@@ -138,9 +160,11 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   const std::size_t last = p_.sets().size() - 1;
   RenderOutput virtual_out;
   const Image8* middle = &st.matched_view;
-  std::string virtual_caption = "virtual view " + p_.sets()[last].name + " matched (estimate before the update)";
+  std::string virtual_caption =
+      "virtual view " + p_.sets()[last].name + " matched (estimate before the update)";
   if (middle->empty()) {
-    renderer_.Render(CameraScene(hand_meshes_, st.link_poses, object_meshes_, st.sets.back().record.T_PO, frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),
+    renderer_.Render(CameraScene(hand_meshes_, st.link_poses, object_meshes_,
+                                 st.sets.back().record.T_PO, frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),
                      virtual_out, false);
     middle = &virtual_out.colour;
     virtual_caption = "virtual view at " + p_.sets()[last].name + " estimate";
@@ -150,12 +174,15 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   RenderOutput orbit_out;
   renderer_.Render(ExternalScene(st, K), orbit_out, false);
   const bool truth = s.has_groundtruth();
-  return SideBySide({&annotated, middle, &orbit_out.colour},
-                    {truth ? "camera + estimates (truth dashed)" : "camera + estimates (no ground truth)", virtual_caption,
-                     truth ? "3-D view: truth dark, estimates translucent" : "3-D view: estimates translucent"});
+  return SideBySide(
+      {&annotated, middle, &orbit_out.colour},
+      {truth ? "camera + estimates (truth dashed)" : "camera + estimates (no ground truth)",
+       virtual_caption,
+       truth ? "3-D view: truth dark, estimates translucent" : "3-D view: estimates translucent"});
 }
 
-Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height, const OverlayLayers& layers) {
+Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height,
+                                      const OverlayLayers& layers) {
   const Scene scene = ExternalScene(st, IntrinsicsFromFov(width, height, 40.0));
   RenderOutput out;
   renderer_.Render(scene, out, false);
@@ -166,7 +193,8 @@ Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int hei
   of.friction_cone_deg = p_.params().filter.friction_cone_deg;
   std::ostringstream hud;
   hud << std::fixed << std::setprecision(3) << "t = " << st.t << " s   3-D view (no camera): "
-      << (p_.session().has_groundtruth() ? "truth dark, estimates translucent" : "estimates translucent, no ground truth");
+      << (p_.session().has_groundtruth() ? "truth dark, estimates translucent"
+                                         : "estimates translucent, no ground truth");
   of.hud.push_back(hud.str());
   AddEstimates(&of, st);
   // The objects are already drawn in 3-D: the overlays add contacts, forces, axes and the HUD.

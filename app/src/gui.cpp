@@ -1,8 +1,8 @@
 #include "inhand/app/gui.hpp"
 
 #define GL_GLEXT_PROTOTYPES 1
-#include <GL/osmesa.h>
 #include <GL/gl.h>
+#include <GL/osmesa.h>
 #include <GLFW/glfw3.h>
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
@@ -13,19 +13,19 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <condition_variable>
+#include <cstdlib>
 #include <deque>
 #include <exception>
+#include <fstream>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <mutex>
 #include <thread>
-#include <fstream>
-#include <iostream>
 
-#include "inhand/app/match_pictures.hpp"
 #include "inhand/app/frame_composer.hpp"
+#include "inhand/app/match_pictures.hpp"
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/renderer/image_io.hpp"
@@ -39,7 +39,8 @@ namespace {
 struct GuiGl {
   void (*GenTextures)(GLsizei, GLuint*) = nullptr;
   void (*BindTexture)(GLenum, GLuint) = nullptr;
-  void (*TexImage2D)(GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum, const void*) = nullptr;
+  void (*TexImage2D)(GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum,
+                     const void*) = nullptr;
   void (*TexParameteri)(GLenum, GLenum, GLint) = nullptr;
   void (*PixelStorei)(GLenum, GLint) = nullptr;
   void (*Viewport)(GLint, GLint, GLsizei, GLsizei) = nullptr;
@@ -51,7 +52,9 @@ struct GuiGl {
 
   template <typename Loader>
   void Load(Loader load) {
-    const auto get = [&](auto& fn, const char* name) { fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(load(name)); };
+    const auto get = [&](auto& fn, const char* name) {
+      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(load(name));
+    };
     get(GenTextures, "glGenTextures");
     get(BindTexture, "glBindTexture");
     get(TexImage2D, "glTexImage2D");
@@ -77,7 +80,8 @@ struct Texture {
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
     const GLenum format = im.channels == 1 ? GL_LUMINANCE : GL_RGB;
-    gl.TexImage2D(GL_TEXTURE_2D, 0, im.channels == 1 ? GL_LUMINANCE : GL_RGB, im.width, im.height, 0, format, GL_UNSIGNED_BYTE, im.data.data());
+    gl.TexImage2D(GL_TEXTURE_2D, 0, im.channels == 1 ? GL_LUMINANCE : GL_RGB, im.width, im.height,
+                  0, format, GL_UNSIGNED_BYTE, im.data.data());
     width = im.width;
     height = im.height;
   }
@@ -87,7 +91,8 @@ struct Texture {
       return;
     }
     const float w = std::min(max_width, static_cast<float>(width));
-    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(id)), ImVec2(w, w * height / width));
+    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(id)),
+                 ImVec2(w, w * height / width));
   }
 };
 
@@ -164,7 +169,8 @@ struct GuiState {
   std::deque<Action> actions;
   std::string status;
   // Histories over samples, per modality set.
-  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints, features, gated, innovation;
+  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints,
+      features, gated, innovation;
   bool pictures_dirty = true;
 };
 
@@ -178,8 +184,7 @@ class Runner {
     last_frame_ = -1;
     checkpoints_.clear();
     const std::size_t sets = player_->sets().size();
-    for (auto* h : Histories())
-      h->assign(sets, {});
+    for (auto* h : Histories()) h->assign(sets, {});
     StepTo(0);
   }
   // Deterministic: going back resumes from the nearest checkpoint at or before k (the run from
@@ -213,8 +218,10 @@ class Runner {
         state_.gated[i].push_back(static_cast<float>(r.gated));
         state_.innovation[i].push_back(static_cast<float>(r.visual_mahalanobis));
       }
-      if (player_->last_frame() >= 0) last_frame_ = player_->last_frame(), state_.pictures_dirty = true;
-      if (!session_.info().camera) state_.pictures_dirty = true;  // the 3-D view follows every sample
+      if (player_->last_frame() >= 0)
+        last_frame_ = player_->last_frame(), state_.pictures_dirty = true;
+      if (!session_.info().camera)
+        state_.pictures_dirty = true;  // the 3-D view follows every sample
       ++next_;
       if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_))
         checkpoints_.emplace(next_, RunnerCheckpoint{player_->Save(), last_frame_});
@@ -228,7 +235,8 @@ class Runner {
     composer_->orbit = state_.orbit;
     const double t = session_.t(std::max(0, next_ - 1));
     // Without a camera: the external 3-D view of the grasp (hand, estimates, contacts, forces).
-    if (!session_.info().camera) return next_ > 0 ? composer_->ComposeExternal(t, 960, 720, state_.layers) : Image8();
+    if (!session_.info().camera)
+      return next_ > 0 ? composer_->ComposeExternal(t, 960, 720, state_.layers) : Image8();
     if (last_frame_ < 0) return Image8();
     return composer_->Compose(last_frame_, t, state_.layers);
   }
@@ -259,8 +267,9 @@ class Runner {
   std::map<int, RunnerCheckpoint> checkpoints_;
   // Every per-sample history of the plots (one series per modality set).
   std::array<std::vector<std::vector<float>>*, 7> Histories() {
-    return {&state_.position_error, &state_.orientation_error, &state_.sigma_position, &state_.constraints,
-            &state_.features, &state_.gated, &state_.innovation};
+    return {&state_.position_error, &state_.orientation_error, &state_.sigma_position,
+            &state_.constraints,    &state_.features,          &state_.gated,
+            &state_.innovation};
   }
 };
 
@@ -268,13 +277,15 @@ struct Textures {
   Texture picture, camera_edges, virtual_edges, difference, corners, pieces, votes, matches;
 };
 
-void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiState& state, Textures& tex) {
+void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiState& state,
+                    Textures& tex) {
   if (!state.pictures_dirty) return;
   state.pictures_dirty = false;
   Image8 picture;
   render.Run([&] { picture = runner.Picture(); });
   tex.picture.Upload(gl, picture);
-  const MatchPictures m = DrawMatchPictures(runner.player().last_image(), runner.player().last_feature_step());
+  const MatchPictures m =
+      DrawMatchPictures(runner.player().last_image(), runner.player().last_feature_step());
   tex.camera_edges.Upload(gl, m.edges_camera);
   tex.virtual_edges.Upload(gl, m.edges_virtual);
   tex.difference.Upload(gl, m.difference);
@@ -289,10 +300,18 @@ void ApplyActions(Runner& runner, GuiState& state) {
     const Action a = state.actions.front();
     state.actions.pop_front();
     switch (a.kind) {
-      case ActionKind::kTogglePlay: state.playing = !state.playing; break;
-      case ActionKind::kStepSample: runner.StepTo(runner.sample() + 1), state.pictures_dirty = true; break;
-      case ActionKind::kStepFrame: runner.StepFrame(); break;
-      case ActionKind::kSeek: runner.StepTo(a.value), state.pictures_dirty = true; break;
+      case ActionKind::kTogglePlay:
+        state.playing = !state.playing;
+        break;
+      case ActionKind::kStepSample:
+        runner.StepTo(runner.sample() + 1), state.pictures_dirty = true;
+        break;
+      case ActionKind::kStepFrame:
+        runner.StepFrame();
+        break;
+      case ActionKind::kSeek:
+        runner.StepTo(a.value), state.pictures_dirty = true;
+        break;
       case ActionKind::kRecompute: {
         try {
           state.params.Validate("GUI parameters");
@@ -308,7 +327,9 @@ void ApplyActions(Runner& runner, GuiState& state) {
       case ActionKind::kSaveParams: {
         std::ofstream out(state.params_path);
         out << TrackerParamsToJson(state.params) << "\n";
-        state.status = out ? std::string("saved ") + state.params_path + " (replay --params accepts it)" : "cannot write " + std::string(state.params_path);
+        state.status =
+            out ? std::string("saved ") + state.params_path + " (replay --params accepts it)"
+                : "cannot write " + std::string(state.params_path);
         break;
       }
     }
@@ -316,7 +337,8 @@ void ApplyActions(Runner& runner, GuiState& state) {
   if (state.playing) {
     // Real time at `speed`, assuming 30 interface frames per second.
     const Session& s = runner.session();
-    const double rate = s.num_samples() > 1 ? (s.num_samples() - 1) / (s.t(s.num_samples() - 1) - s.t(0)) : 100.0;
+    const double rate =
+        s.num_samples() > 1 ? (s.num_samples() - 1) / (s.t(s.num_samples() - 1) - s.t(0)) : 100.0;
     const int step = std::max(1, static_cast<int>(std::lround(rate * state.speed / 30.0)));
     runner.StepTo(runner.sample() + step);  // marks the pictures dirty when a camera frame arrives
     if (runner.sample() >= s.num_samples() - 1) state.playing = false;
@@ -331,23 +353,28 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   const SessionPlayer& p = runner.player();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(height)));
-  ImGui::Begin("inhand", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse);
+  ImGui::Begin("inhand", nullptr,
+               ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse);
   ImGui::PushItemWidth(kPanelWidth * 0.5f);  // leaves room for the longest label
   ImGui::TextWrapped("%s", s.info().name.c_str());
-  ImGui::Text("t = %.3f s  sample %d/%d  frame %d", s.t(std::max(0, runner.sample())), runner.sample(), s.num_samples() - 1, runner.frame());
-  if (ImGui::Button(state.playing ? "Pause" : "Play")) state.actions.push_back({ActionKind::kTogglePlay});
+  ImGui::Text("t = %.3f s  sample %d/%d  frame %d", s.t(std::max(0, runner.sample())),
+              runner.sample(), s.num_samples() - 1, runner.frame());
+  if (ImGui::Button(state.playing ? "Pause" : "Play"))
+    state.actions.push_back({ActionKind::kTogglePlay});
   ImGui::SameLine();
   if (ImGui::Button("+1 sample")) state.actions.push_back({ActionKind::kStepSample});
   ImGui::SameLine();
   if (ImGui::Button("+1 frame")) state.actions.push_back({ActionKind::kStepFrame});
   ImGui::SliderFloat("speed", &state.speed, 0.1f, 4.0f, "%.1fx");
   int seek = state.seek_sample;
-  if (ImGui::SliderInt("sample", &seek, 0, s.num_samples() - 1)) state.actions.push_back({ActionKind::kSeek, seek});
+  if (ImGui::SliderInt("sample", &seek, 0, s.num_samples() - 1))
+    state.actions.push_back({ActionKind::kSeek, seek});
   if (!state.editing_time) state.typed_time = static_cast<float>(s.t(std::max(0, runner.sample())));
   ImGui::InputFloat("time [s]", &state.typed_time, 0.1f, 1.0f, "%.3f");
   state.editing_time = ImGui::IsItemActive();
   ImGui::SameLine();
-  if (ImGui::Button("Go")) state.actions.push_back({ActionKind::kSeek, runner.SampleAt(state.typed_time)});
+  if (ImGui::Button("Go"))
+    state.actions.push_back({ActionKind::kSeek, runner.SampleAt(state.typed_time)});
   ImGui::Text("3-D view: drag it to orbit, wheel to zoom");
   ImGui::Separator();
   ImGui::Text("Overlay layers");
@@ -365,17 +392,23 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::Separator();
   ImGui::Text("Filter parameters");
   float sigma_mm = static_cast<float>(state.params.filter.contact_sigma * 1000);
-  if (ImGui::SliderFloat("contact sigma [mm]", &sigma_mm, 0.1f, 20.0f)) state.params.filter.contact_sigma = sigma_mm / 1000.0;
+  if (ImGui::SliderFloat("contact sigma [mm]", &sigma_mm, 0.1f, 20.0f))
+    state.params.filter.contact_sigma = sigma_mm / 1000.0;
   float force = static_cast<float>(state.params.filter.force_min);
-  if (ImGui::SliderFloat("force min [N]", &force, 0.0f, 10.0f)) state.params.filter.force_min = force;
+  if (ImGui::SliderFloat("force min [N]", &force, 0.0f, 10.0f))
+    state.params.filter.force_min = force;
   float cone = static_cast<float>(state.params.filter.friction_cone_deg);
-  if (ImGui::SliderFloat("friction cone [deg]", &cone, 5.0f, 90.0f)) state.params.filter.friction_cone_deg = cone;
+  if (ImGui::SliderFloat("friction cone [deg]", &cone, 5.0f, 90.0f))
+    state.params.filter.friction_cone_deg = cone;
   float pixel = static_cast<float>(state.params.filter.pixel_sigma);
-  if (ImGui::SliderFloat("pixel sigma [px]", &pixel, 0.5f, 10.0f)) state.params.filter.pixel_sigma = pixel;
+  if (ImGui::SliderFloat("pixel sigma [px]", &pixel, 0.5f, 10.0f))
+    state.params.filter.pixel_sigma = pixel;
   float camera_mm = static_cast<float>(state.params.filter.camera_position_sigma * 1000);
-  if (ImGui::SliderFloat("camera sigma [mm]", &camera_mm, 0.0f, 10.0f)) state.params.filter.camera_position_sigma = camera_mm / 1000.0;
+  if (ImGui::SliderFloat("camera sigma [mm]", &camera_mm, 0.0f, 10.0f))
+    state.params.filter.camera_position_sigma = camera_mm / 1000.0;
   float camera_deg = static_cast<float>(state.params.filter.camera_orientation_sigma * 180 / M_PI);
-  if (ImGui::SliderFloat("camera sigma [deg]", &camera_deg, 0.0f, 3.0f)) state.params.filter.camera_orientation_sigma = camera_deg * M_PI / 180;
+  if (ImGui::SliderFloat("camera sigma [deg]", &camera_deg, 0.0f, 3.0f))
+    state.params.filter.camera_orientation_sigma = camera_deg * M_PI / 180;
   ImGui::SliderInt("contact iterations", &state.params.filter.contact_iterations, 1, 5);
   ImGui::Checkbox("normal-only contacts", &state.params.filter.contact_normal_only);
   if (ImGui::Button("Recompute from the start")) state.actions.push_back({ActionKind::kRecompute});
@@ -386,13 +419,17 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::End();
 
   ImGui::SetNextWindowPos(ImVec2(kPanelWidth, 0));
-  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(width) - kPanelWidth, static_cast<float>(height)));
-  ImGui::Begin("views", nullptr, ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
+  ImGui::SetNextWindowSize(
+      ImVec2(static_cast<float>(width) - kPanelWidth, static_cast<float>(height)));
+  ImGui::Begin("views", nullptr,
+               ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse |
+                   ImGuiWindowFlags_NoTitleBar);
   const float avail = ImGui::GetContentRegionAvail().x;
   const Session& shown = runner.player().session();
-  ImGui::TextUnformatted(!shown.info().camera        ? "3-D view (the session has no camera)"
-                         : shown.has_groundtruth() ? "camera + estimates (truth dashed) | virtual view | 3-D view"
-                                                   : "camera + estimates (no ground truth) | virtual view | 3-D view");
+  ImGui::TextUnformatted(!shown.info().camera ? "3-D view (the session has no camera)"
+                         : shown.has_groundtruth()
+                             ? "camera + estimates (truth dashed) | virtual view | 3-D view"
+                             : "camera + estimates (no ground truth) | virtual view | 3-D view");
   tex.picture.Show(avail);
   if (ImGui::IsItemHovered()) {
     const ImGuiIO& io = ImGui::GetIO();
@@ -404,7 +441,8 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
       state.pictures_dirty = true;
     }
     if (over_3d && io.MouseWheel != 0.0f) {
-      state.orbit.distance = std::clamp(state.orbit.distance * (1.0 - 0.1 * io.MouseWheel), 0.1, 2.0);
+      state.orbit.distance =
+          std::clamp(state.orbit.distance * (1.0 - 0.1 * io.MouseWheel), 0.1, 2.0);
       state.pictures_dirty = true;
     }
   }
@@ -412,7 +450,8 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
     if (ImGui::BeginTabItem("Errors and uncertainty")) {
       for (std::size_t i = 0; i < p.sets().size(); ++i) {
         const Rgb& c = p.sets()[i].colour;
-        ImGui::PushStyleColor(ImGuiCol_PlotLines, ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f));
+        ImGui::PushStyleColor(ImGuiCol_PlotLines,
+                              ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f));
         const auto& pe = state.position_error[i];
         const auto& oe = state.orientation_error[i];
         const auto& sp = state.sigma_position[i];
@@ -421,21 +460,32 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         char id[48], text[96];
         std::snprintf(id, sizeof(id), "##pos%zu", i);
         const bool truth = p.session().has_groundtruth();
-        if (truth) std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(), pe.empty() ? 0.f : pe.back());
-        else std::snprintf(text, sizeof(text), "%s: no ground truth", p.sets()[i].name.c_str());
-        ImGui::PlotLines(id, pe.data(), static_cast<int>(pe.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
+        if (truth)
+          std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(),
+                        pe.empty() ? 0.f : pe.back());
+        else
+          std::snprintf(text, sizeof(text), "%s: no ground truth", p.sets()[i].name.c_str());
+        ImGui::PlotLines(id, pe.data(), static_cast<int>(pe.size()), 0, text, 0.0f, FLT_MAX,
+                         ImVec2(w, 48));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##ori%zu", i);
-        if (truth) std::snprintf(text, sizeof(text), "orientation error %.1f deg", oe.empty() ? 0.f : oe.back());
-        else std::snprintf(text, sizeof(text), "(no ground truth)");
-        ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
+        if (truth)
+          std::snprintf(text, sizeof(text), "orientation error %.1f deg",
+                        oe.empty() ? 0.f : oe.back());
+        else
+          std::snprintf(text, sizeof(text), "(no ground truth)");
+        ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX,
+                         ImVec2(w, 48));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##sig%zu", i);
         const EstimateRecord& last = p.last(i);
-        std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm\n%.1f/%.1f/%.1f deg", last.sigma_position.x() * 1000,
-                      last.sigma_position.y() * 1000, last.sigma_position.z() * 1000, last.sigma_orientation.x() * 180 / M_PI,
-                      last.sigma_orientation.y() * 180 / M_PI, last.sigma_orientation.z() * 180 / M_PI);
-        ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 48));
+        std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm\n%.1f/%.1f/%.1f deg",
+                      last.sigma_position.x() * 1000, last.sigma_position.y() * 1000,
+                      last.sigma_position.z() * 1000, last.sigma_orientation.x() * 180 / M_PI,
+                      last.sigma_orientation.y() * 180 / M_PI,
+                      last.sigma_orientation.z() * 180 / M_PI);
+        ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX,
+                         ImVec2(w, 48));
         ImGui::PopStyleColor();
       }
       ImGui::EndTabItem();
@@ -444,7 +494,8 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
       for (std::size_t i = 0; i < p.sets().size(); ++i) {
         const auto& b = p.last(i).biases;
         std::vector<float> deg(static_cast<std::size_t>(b.size()));
-        for (long j = 0; j < b.size(); ++j) deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
+        for (long j = 0; j < b.size(); ++j)
+          deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
         const float w = (avail - 3 * ImGui::GetStyle().ItemSpacing.x) / 4;
         const Rgb& c = p.sets()[i].colour;
         const ImVec4 colour(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f);
@@ -453,19 +504,27 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
         char id[48], text[96];
         std::snprintf(id, sizeof(id), "##bias%zu", i);
         std::snprintf(text, sizeof(text), "%s biases [deg], +-6", p.sets()[i].name.c_str());
-        ImGui::PlotHistogram(id, deg.data(), static_cast<int>(deg.size()), 0, text, -6.0f, 6.0f, ImVec2(w, 44));
+        ImGui::PlotHistogram(id, deg.data(), static_cast<int>(deg.size()), 0, text, -6.0f, 6.0f,
+                             ImVec2(w, 44));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##constraints%zu", i);
-        std::snprintf(text, sizeof(text), "constraints %d", state.constraints[i].empty() ? 0 : static_cast<int>(state.constraints[i].back()));
-        ImGui::PlotLines(id, state.constraints[i].data(), static_cast<int>(state.constraints[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+        std::snprintf(
+            text, sizeof(text), "constraints %d",
+            state.constraints[i].empty() ? 0 : static_cast<int>(state.constraints[i].back()));
+        ImGui::PlotLines(id, state.constraints[i].data(),
+                         static_cast<int>(state.constraints[i].size()), 0, text, 0.0f, FLT_MAX,
+                         ImVec2(w, 44));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##gated%zu", i);
         std::snprintf(text, sizeof(text), "gated features %d", p.last(i).gated);
-        ImGui::PlotLines(id, state.gated[i].data(), static_cast<int>(state.gated[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+        ImGui::PlotLines(id, state.gated[i].data(), static_cast<int>(state.gated[i].size()), 0,
+                         text, 0.0f, FLT_MAX, ImVec2(w, 44));
         ImGui::SameLine();
         std::snprintf(id, sizeof(id), "##innovation%zu", i);
         std::snprintf(text, sizeof(text), "innovation (Mahal.) %.1f", p.last(i).visual_mahalanobis);
-        ImGui::PlotLines(id, state.innovation[i].data(), static_cast<int>(state.innovation[i].size()), 0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+        ImGui::PlotLines(id, state.innovation[i].data(),
+                         static_cast<int>(state.innovation[i].size()), 0, text, 0.0f, FLT_MAX,
+                         ImVec2(w, 44));
         ImGui::PopStyleColor(2);
       }
       ImGui::EndTabItem();
@@ -473,7 +532,8 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
     if (ImGui::BeginTabItem("Feature matching")) {
       const float w = (avail - 16) / 3;
       // A row of three titled pictures.
-      const auto row = [&](const std::array<const char*, 3>& titles, const std::array<const Texture*, 3>& pictures) {
+      const auto row = [&](const std::array<const char*, 3>& titles,
+                           const std::array<const Texture*, 3>& pictures) {
         for (int c = 0; c < 3; ++c) {
           if (c) ImGui::SameLine(static_cast<float>(c) * (w + 8));
           ImGui::Text("%s", titles[static_cast<std::size_t>(c)]);
@@ -483,13 +543,17 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
           pictures[static_cast<std::size_t>(c)]->Show(w);
         }
       };
-      row({"camera edges", "virtual edges", "|camera - virtual|"}, {&tex.camera_edges, &tex.virtual_edges, &tex.difference});
-      row({"Harris corners (kept green)", "contour pieces", "matches (RANSAC inliers green)"}, {&tex.corners, &tex.pieces, &tex.matches});
+      row({"camera edges", "virtual edges", "|camera - virtual|"},
+          {&tex.camera_edges, &tex.virtual_edges, &tex.difference});
+      row({"Harris corners (kept green)", "contour pieces", "matches (RANSAC inliers green)"},
+          {&tex.corners, &tex.pieces, &tex.matches});
       ImGui::Text("Hough votes per corner");
       tex.votes.Show(avail);
       const MatchResult& m = p.last_feature_step().match;
-      ImGui::Text("%zu virtual corners, %zu Hough matches, %d RANSAC inliers (inhand match writes every stage)",
-                  m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());
+      ImGui::Text(
+          "%zu virtual corners, %zu Hough matches, %d RANSAC inliers (inhand match writes every "
+          "stage)",
+          m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());
       ImGui::EndTabItem();
     }
     ImGui::EndTabBar();
@@ -503,7 +567,8 @@ void SaveScreenshot(const GuiGl& gl, int width, int height, const std::string& p
   gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
   gl.ReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
   for (int y = 0; y < height; ++y)
-    std::copy_n(&rows[static_cast<std::size_t>(height - 1 - y) * width * 3], width * 3, img.pixel(0, y));
+    std::copy_n(&rows[static_cast<std::size_t>(height - 1 - y) * width * 3], width * 3,
+                img.pixel(0, y));
   WriteImage(path, img);
 }
 
@@ -542,19 +607,23 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
   for (int y = 0; y < cmd.height; ++y)
     for (int x = 0; x < cmd.width; ++x)
       for (int c = 0; c < 3; ++c)
-        img.pixel(x, y)[c] = buffer[(static_cast<std::size_t>(cmd.height - 1 - y) * cmd.width + x) * 4 + static_cast<std::size_t>(c)];
+        img.pixel(x, y)[c] =
+            buffer[(static_cast<std::size_t>(cmd.height - 1 - y) * cmd.width + x) * 4 +
+                   static_cast<std::size_t>(c)];
   WriteImage(cmd.screenshot, img);
   ImGui_ImplOpenGL2_Shutdown();
   ImGui::DestroyContext();
   OSMesaDestroyContext(ctx);
-  std::cout << "offscreen interface (no display): " << frames << " frames, screenshot " << cmd.screenshot << "\n";
+  std::cout << "offscreen interface (no display): " << frames << " frames, screenshot "
+            << cmd.screenshot << "\n";
   return 0;
 }
 
 }  // namespace
 
 int RunGui(const GuiCommand& cmd) {
-  if (cmd.width < 640 || cmd.height < 480) throw InputError("gui: the window must be at least 640x480");
+  if (cmd.width < 640 || cmd.height < 480)
+    throw InputError("gui: the window must be at least 640x480");
   Session session = Session::Load(cmd.session);
   GuiState state;
   if (!cmd.params.empty()) state.params = ReadTrackerParams(cmd.params);
@@ -569,7 +638,8 @@ int RunGui(const GuiCommand& cmd) {
   const bool have_display = display && *display && glfwInit();
   if (!have_display) {
     if (cmd.screenshot.empty()) {
-      std::cerr << "inhand: error: no display for the interactive session (set DISPLAY, or use --screenshot FILE to render it offscreen)\n";
+      std::cerr << "inhand: error: no display for the interactive session (set DISPLAY, or use "
+                   "--screenshot FILE to render it offscreen)\n";
       return 2;
     }
     RenderThread render;
@@ -582,7 +652,8 @@ int RunGui(const GuiCommand& cmd) {
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  GLFWwindow* window = glfwCreateWindow(cmd.width, cmd.height, ("inhand: " + session.info().name).c_str(), nullptr, nullptr);
+  GLFWwindow* window = glfwCreateWindow(
+      cmd.width, cmd.height, ("inhand: " + session.info().name).c_str(), nullptr, nullptr);
   if (!window) {
     glfwTerminate();
     throw std::runtime_error("gui: cannot open an OpenGL 3.3 window");
@@ -607,7 +678,8 @@ int RunGui(const GuiCommand& cmd) {
   auto last = std::chrono::steady_clock::now();
   while (!glfwWindowShouldClose(window) && (cmd.frames < 0 || frames < cmd.frames)) {
     const auto now = std::chrono::steady_clock::now();
-    if (frames > 0) frame_ms.push_back(std::chrono::duration<double, std::milli>(now - last).count());
+    if (frames > 0)
+      frame_ms.push_back(std::chrono::duration<double, std::milli>(now - last).count());
     last = now;
     glfwPollEvents();
     render.Run([&] { ApplyActions(runner, state); });
@@ -638,8 +710,10 @@ int RunGui(const GuiCommand& cmd) {
   glfwTerminate();
   std::sort(frame_ms.begin(), frame_ms.end());
   const double median = frame_ms.empty() ? 0.0 : frame_ms[frame_ms.size() / 2];
-  const double p95 = frame_ms.empty() ? 0.0 : frame_ms[std::min(frame_ms.size() - 1, frame_ms.size() * 95 / 100)];
-  std::cout << "window: " << frames << " frames, frame time median " << median << " ms, p95 " << p95 << " ms";
+  const double p95 =
+      frame_ms.empty() ? 0.0 : frame_ms[std::min(frame_ms.size() - 1, frame_ms.size() * 95 / 100)];
+  std::cout << "window: " << frames << " frames, frame time median " << median << " ms, p95 " << p95
+            << " ms";
   if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;
   std::cout << "\n";
   return 0;

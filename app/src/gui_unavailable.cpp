@@ -5,7 +5,8 @@
 namespace inhand::app {
 
 int RunGui(const GuiCommand&) {
-  throw InputError("gui: this inhand was built without the GUI (configure with -DINHAND_BUILD_GUI=ON)");
+  throw InputError(
+      "gui: this inhand was built without the GUI (configure with -DINHAND_BUILD_GUI=ON)");
 }
 
 }  // namespace inhand::app

@@ -13,29 +13,37 @@ namespace inhand::app {
 namespace {
 
 cv::Mat Rgb(const Image8& im) {
-  const cv::Mat m(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3, const_cast<std::uint8_t*>(im.data.data()));
+  const cv::Mat m(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3,
+                  const_cast<std::uint8_t*>(im.data.data()));
   cv::Mat out;
-  if (im.channels == 1) cv::cvtColor(m, out, cv::COLOR_GRAY2RGB);
-  else out = m.clone();
+  if (im.channels == 1)
+    cv::cvtColor(m, out, cv::COLOR_GRAY2RGB);
+  else
+    out = m.clone();
   return out;
 }
 
 Image8 ToImage(const cv::Mat& rgb) {
   Image8 out(rgb.cols, rgb.rows, 3);
-  for (int y = 0; y < rgb.rows; ++y) std::copy_n(rgb.ptr<std::uint8_t>(y), rgb.cols * 3, out.pixel(0, y));
+  for (int y = 0; y < rgb.rows; ++y)
+    std::copy_n(rgb.ptr<std::uint8_t>(y), rgb.cols * 3, out.pixel(0, y));
   return out;
 }
 
-cv::Point P(const Vec2& v) { return cv::Point(static_cast<int>(std::lround(v.x())), static_cast<int>(std::lround(v.y()))); }
+cv::Point P(const Vec2& v) {
+  return cv::Point(static_cast<int>(std::lround(v.x())), static_cast<int>(std::lround(v.y())));
+}
 
 void Caption(cv::Mat& m, const std::string& text) {
   cv::rectangle(m, cv::Rect(0, 0, m.cols, 20), cv::Scalar(30, 30, 30), cv::FILLED);
-  cv::putText(m, text, cv::Point(6, 14), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  cv::putText(m, text, cv::Point(6, 14), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255),
+              1, cv::LINE_AA);
 }
 
 cv::Scalar PieceColour(int i) {
-  static const cv::Scalar palette[] = {{230, 25, 75}, {60, 180, 75}, {255, 225, 25}, {0, 130, 200}, {245, 130, 48},
-                                       {145, 30, 180}, {70, 240, 240}, {240, 50, 230}, {210, 245, 60}, {250, 190, 212}};
+  static const cv::Scalar palette[] = {
+      {230, 25, 75},  {60, 180, 75},  {255, 225, 25}, {0, 130, 200},  {245, 130, 48},
+      {145, 30, 180}, {70, 240, 240}, {240, 50, 230}, {210, 245, 60}, {250, 190, 212}};
   return palette[i % 10];
 }
 
@@ -43,7 +51,8 @@ Image8 Difference(const Image8& a, const Image8& b) {
   if (a.empty() || b.empty() || a.width != b.width || a.height != b.height) return Image8();
   Image8 d(a.width, a.height, 3);
   for (std::size_t i = 0; i < d.data.size(); ++i) {
-    const int ca = a.channels == 3 ? a.data[i] : a.data[i / 3], cb = b.channels == 3 ? b.data[i] : b.data[i / 3];
+    const int ca = a.channels == 3 ? a.data[i] : a.data[i / 3],
+              cb = b.channels == 3 ? b.data[i] : b.data[i / 3];
     d.data[i] = static_cast<std::uint8_t>(std::min(255, 2 * std::abs(ca - cb)));
   }
   return d;
@@ -59,9 +68,12 @@ MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs
   cv::Mat camera = Rgb(camera_image), virt = Rgb(fs.virtual_view.colour);
   cv::Mat real_edges = Rgb(d.real_edges), virtual_edges = Rgb(d.virtual_edges);
   cv::Mat corners_real = camera.clone(), corners_virtual = virt.clone();
-  for (const Vec2& c : d.real_corners) cv::circle(corners_real, P(c), 4, cv::Scalar(255, 230, 0), 1, cv::LINE_AA);
-  for (const Vec2& c : d.virtual_corners_rejected) cv::circle(corners_virtual, P(c), 2, cv::Scalar(220, 40, 40), cv::FILLED);
-  for (const Vec2& c : d.virtual_corners) cv::circle(corners_virtual, P(c), 5, cv::Scalar(40, 220, 40), 2, cv::LINE_AA);
+  for (const Vec2& c : d.real_corners)
+    cv::circle(corners_real, P(c), 4, cv::Scalar(255, 230, 0), 1, cv::LINE_AA);
+  for (const Vec2& c : d.virtual_corners_rejected)
+    cv::circle(corners_virtual, P(c), 2, cv::Scalar(220, 40, 40), cv::FILLED);
+  for (const Vec2& c : d.virtual_corners)
+    cv::circle(corners_virtual, P(c), 5, cv::Scalar(40, 220, 40), 2, cv::LINE_AA);
   cv::Mat pieces = virtual_edges.clone() * 0.35;
   for (std::size_t i = 0; i < d.pieces.size(); ++i) {
     const Vec2& c = d.virtual_corners[i];
@@ -69,24 +81,32 @@ MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs
       const cv::Point q = P(c + o);
       if (q.x >= 0 && q.y >= 0 && q.x < pieces.cols && q.y < pieces.rows) {
         const cv::Scalar col = PieceColour(static_cast<int>(i));
-        pieces.at<cv::Vec3b>(q) = cv::Vec3b(static_cast<std::uint8_t>(col[0]), static_cast<std::uint8_t>(col[1]), static_cast<std::uint8_t>(col[2]));
+        pieces.at<cv::Vec3b>(q) =
+            cv::Vec3b(static_cast<std::uint8_t>(col[0]), static_cast<std::uint8_t>(col[1]),
+                      static_cast<std::uint8_t>(col[2]));
       }
     }
-    cv::putText(pieces, std::to_string(i), P(c) + cv::Point(4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35, PieceColour(static_cast<int>(i)), 1, cv::LINE_AA);
+    cv::putText(pieces, std::to_string(i), P(c) + cv::Point(4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35,
+                PieceColour(static_cast<int>(i)), 1, cv::LINE_AA);
   }
   // Hough accumulators, tiled, marked by their fate.
   const int tile = 96, per_row = 8;
   const int n = static_cast<int>(d.votes.size());
-  cv::Mat votes(std::max(1, (n + per_row - 1) / per_row) * tile, per_row * tile, CV_8UC3, cv::Scalar(20, 20, 20));
+  cv::Mat votes(std::max(1, (n + per_row - 1) / per_row) * tile, per_row * tile, CV_8UC3,
+                cv::Scalar(20, 20, 20));
   for (int i = 0; i < n; ++i) {
     if (d.votes[static_cast<std::size_t>(i)].empty()) continue;
     cv::Mat heat;
     cv::applyColorMap(Rgb(d.votes[static_cast<std::size_t>(i)]), heat, cv::COLORMAP_INFERNO);
     cv::resize(heat, heat, cv::Size(tile - 4, tile - 4), 0, 0, cv::INTER_NEAREST);
-    heat.copyTo(votes(cv::Rect((i % per_row) * tile + 2, (i / per_row) * tile + 2, tile - 4, tile - 4)));
-    const bool rejected = std::find(d.vote_rejected.begin(), d.vote_rejected.end(), i) != d.vote_rejected.end();
-    cv::putText(votes, std::to_string(i) + (rejected ? " weak" : ""), cv::Point((i % per_row) * tile + 4, (i / per_row) * tile + 14),
-                cv::FONT_HERSHEY_SIMPLEX, 0.38, rejected ? cv::Scalar(255, 80, 80) : cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    heat.copyTo(
+        votes(cv::Rect((i % per_row) * tile + 2, (i / per_row) * tile + 2, tile - 4, tile - 4)));
+    const bool rejected =
+        std::find(d.vote_rejected.begin(), d.vote_rejected.end(), i) != d.vote_rejected.end();
+    cv::putText(votes, std::to_string(i) + (rejected ? " weak" : ""),
+                cv::Point((i % per_row) * tile + 4, (i / per_row) * tile + 14),
+                cv::FONT_HERSHEY_SIMPLEX, 0.38,
+                rejected ? cv::Scalar(255, 80, 80) : cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
   cv::Mat matches = camera.clone();
   for (const FeatureMatch& m : r.matches) {
@@ -100,22 +120,31 @@ MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs
     Vec2 c = Vec2::Zero();
     for (const Vec2& v : d.virtual_corners) c += v;
     c /= static_cast<double>(d.virtual_corners.size());
-    cv::arrowedLine(matches, P(c), P(c + d.global_shift), cv::Scalar(255, 220, 0), 2, cv::LINE_AA, 0, 0.2);
+    cv::arrowedLine(matches, P(c), P(c + d.global_shift), cv::Scalar(255, 220, 0), 2, cv::LINE_AA,
+                    0, 0.2);
     char text[96];
-    std::snprintf(text, sizeof text, "0. shift (%+.0f, %+.0f) px, chamfer %.1f px (unshifted %.1f)", d.global_shift.x(), d.global_shift.y(),
-                  d.global_cost, d.global_cost_unshifted);
-    cv::putText(matches, text, cv::Point(8, matches.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 220, 0), 1, cv::LINE_AA);
+    std::snprintf(text, sizeof text, "0. shift (%+.0f, %+.0f) px, chamfer %.1f px (unshifted %.1f)",
+                  d.global_shift.x(), d.global_shift.y(), d.global_cost, d.global_cost_unshifted);
+    cv::putText(matches, text, cv::Point(8, matches.rows - 10), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                cv::Scalar(255, 220, 0), 1, cv::LINE_AA);
   }
 
   {
     // Everything in one picture: 2 rows x 3 columns at half size.
     std::vector<std::pair<std::string, cv::Mat>> grid = {
-        {"1. camera edges (Canny)", real_edges}, {"1. virtual edges (Canny)", virtual_edges}, {"2. Harris corners (virtual: kept green)", corners_virtual},
-        {"3. contour pieces", pieces}, {global ? "0. shift, 4+5. matches (inliers green)" : "4+5. matches (inliers green)", matches}, {"virtual view at the jtf estimate", virt}};
+        {"1. camera edges (Canny)", real_edges},
+        {"1. virtual edges (Canny)", virtual_edges},
+        {"2. Harris corners (virtual: kept green)", corners_virtual},
+        {"3. contour pieces", pieces},
+        {global ? "0. shift, 4+5. matches (inliers green)" : "4+5. matches (inliers green)",
+         matches},
+        {"virtual view at the jtf estimate", virt}};
     std::vector<cv::Mat> rows, cells;
     for (std::size_t i = 0; i < grid.size(); ++i) {
       cv::Mat c;
-      cv::resize(grid[i].second, c, cv::Size(grid[i].second.cols / 2 * 2 / 2, grid[i].second.rows / 2), 0, 0, cv::INTER_AREA);
+      cv::resize(grid[i].second, c,
+                 cv::Size(grid[i].second.cols / 2 * 2 / 2, grid[i].second.rows / 2), 0, 0,
+                 cv::INTER_AREA);
       Caption(c, grid[i].first);
       cells.push_back(c);
       if (cells.size() == 3) {

@@ -16,17 +16,35 @@ namespace {
 using Json = nlohmann::json;
 
 // JSON schemas of the foxglove message types used (the fields Foxglove reads).
-const Json kTime = {{"type", "object"}, {"properties", {{"sec", {{"type", "integer"}}}, {"nsec", {{"type", "integer"}}}}}};
-const Json kVector3 = {{"type", "object"}, {"properties", {{"x", {{"type", "number"}}}, {"y", {{"type", "number"}}}, {"z", {{"type", "number"}}}}}};
+const Json kTime = {
+    {"type", "object"},
+    {"properties", {{"sec", {{"type", "integer"}}}, {"nsec", {{"type", "integer"}}}}}};
+const Json kVector3 = {
+    {"type", "object"},
+    {"properties",
+     {{"x", {{"type", "number"}}}, {"y", {{"type", "number"}}}, {"z", {{"type", "number"}}}}}};
 const Json kQuaternion = {{"type", "object"},
-                          {"properties", {{"x", {{"type", "number"}}}, {"y", {{"type", "number"}}}, {"z", {{"type", "number"}}}, {"w", {{"type", "number"}}}}}};
-const Json kPose = {{"type", "object"}, {"properties", {{"position", kVector3}, {"orientation", kQuaternion}}}};
+                          {"properties",
+                           {{"x", {{"type", "number"}}},
+                            {"y", {{"type", "number"}}},
+                            {"z", {{"type", "number"}}},
+                            {"w", {{"type", "number"}}}}}};
+const Json kPose = {{"type", "object"},
+                    {"properties", {{"position", kVector3}, {"orientation", kQuaternion}}}};
 const Json kColor = {{"type", "object"},
-                     {"properties", {{"r", {{"type", "number"}}}, {"g", {{"type", "number"}}}, {"b", {{"type", "number"}}}, {"a", {{"type", "number"}}}}}};
-const Json kPoint2 = {{"type", "object"}, {"properties", {{"x", {{"type", "number"}}}, {"y", {{"type", "number"}}}}}};
+                     {"properties",
+                      {{"r", {{"type", "number"}}},
+                       {"g", {{"type", "number"}}},
+                       {"b", {{"type", "number"}}},
+                       {"a", {{"type", "number"}}}}}};
+const Json kPoint2 = {{"type", "object"},
+                      {"properties", {{"x", {{"type", "number"}}}, {"y", {{"type", "number"}}}}}};
 
 Json Schema(const std::string& title, const Json& properties) {
-  return {{"$schema", "https://json-schema.org/draft/2020-12/schema"}, {"title", title}, {"type", "object"}, {"properties", properties}};
+  return {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
+          {"title", title},
+          {"type", "object"},
+          {"properties", properties}};
 }
 
 Json Time(double t) {
@@ -36,9 +54,12 @@ Json Time(double t) {
 Json PoseJson(const Transform& T) {
   const Quat q(T.linear());
   const Vec3& p = T.translation();
-  return {{"position", {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}}, {"orientation", {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}};
+  return {{"position", {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}},
+          {"orientation", {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}};
 }
-Json ColorJson(const Rgb& c, double a = 1.0) { return {{"r", c.r / 255.0}, {"g", c.g / 255.0}, {"b", c.b / 255.0}, {"a", a}}; }
+Json ColorJson(const Rgb& c, double a = 1.0) {
+  return {{"r", c.r / 255.0}, {"g", c.g / 255.0}, {"b", c.b / 255.0}, {"a", a}};
+}
 
 std::string Base64(const std::string& bytes) {
   static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -46,44 +67,67 @@ std::string Base64(const std::string& bytes) {
   out.reserve((bytes.size() + 2) / 3 * 4);
   std::size_t i = 0;
   for (; i + 2 < bytes.size(); i += 3) {
-    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16 | static_cast<unsigned char>(bytes[i + 1]) << 8 | static_cast<unsigned char>(bytes[i + 2]);
+    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16 |
+                       static_cast<unsigned char>(bytes[i + 1]) << 8 |
+                       static_cast<unsigned char>(bytes[i + 2]);
     out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
   }
   if (i + 1 == bytes.size()) {
     const unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
     out += {k[v >> 18], k[(v >> 12) & 63], '=', '='};
   } else if (i + 2 == bytes.size()) {
-    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16 | static_cast<unsigned char>(bytes[i + 1]) << 8;
+    const unsigned v =
+        static_cast<unsigned char>(bytes[i]) << 16 | static_cast<unsigned char>(bytes[i + 1]) << 8;
     out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], '='};
   }
   return out;
 }
 
-std::uint64_t LogTime(double t) { return static_cast<std::uint64_t>(std::max<long long>(0, std::llround(t * 1e9))); }
+std::uint64_t LogTime(double t) {
+  return static_cast<std::uint64_t>(std::max<long long>(0, std::llround(t * 1e9)));
+}
 
 }  // namespace
 
-McapExport::McapExport(const std::string& path, const SessionPlayer& player) : p_(player), w_(std::make_unique<ros::McapWriter>(path)) {
+McapExport::McapExport(const std::string& path, const SessionPlayer& player)
+    : p_(player), w_(std::make_unique<ros::McapWriter>(path)) {
   const auto schema = [&](const std::string& name, const Json& properties) {
     return w_->AddSchema(name, "jsonschema", Schema(name, properties).dump());
   };
-  const std::uint16_t pose = schema("foxglove.PoseInFrame", {{"timestamp", kTime}, {"frame_id", {{"type", "string"}}}, {"pose", kPose}});
-  for (const ModalitySet& s : p_.sets()) pose_channels_.push_back(w_->AddChannel("/inhand/pose/" + s.name, pose, "json"));
-  tf_ = w_->AddChannel("/tf", schema("foxglove.FrameTransform", {{"timestamp", kTime}, {"parent_frame_id", {{"type", "string"}}},
-                                                                  {"child_frame_id", {{"type", "string"}}}, {"translation", kVector3},
-                                                                  {"rotation", kQuaternion}}),
+  const std::uint16_t pose =
+      schema("foxglove.PoseInFrame",
+             {{"timestamp", kTime}, {"frame_id", {{"type", "string"}}}, {"pose", kPose}});
+  for (const ModalitySet& s : p_.sets())
+    pose_channels_.push_back(w_->AddChannel("/inhand/pose/" + s.name, pose, "json"));
+  tf_ = w_->AddChannel("/tf",
+                       schema("foxglove.FrameTransform", {{"timestamp", kTime},
+                                                          {"parent_frame_id", {{"type", "string"}}},
+                                                          {"child_frame_id", {{"type", "string"}}},
+                                                          {"translation", kVector3},
+                                                          {"rotation", kQuaternion}}),
                        "json");
-  errors_ = w_->AddChannel("/inhand/errors", schema("inhand.Errors", {{"t", {{"type", "number"}}}, {"sets", {{"type", "object"}}}}), "json");
+  errors_ = w_->AddChannel(
+      "/inhand/errors",
+      schema("inhand.Errors", {{"t", {{"type", "number"}}}, {"sets", {{"type", "object"}}}}),
+      "json");
   if (p_.session().info().camera) {
-    image_ = w_->AddChannel("/camera/image", schema("foxglove.CompressedImage", {{"timestamp", kTime}, {"frame_id", {{"type", "string"}}},
-                                                                                 {"data", {{"type", "string"}, {"contentEncoding", "base64"}}},
-                                                                                 {"format", {{"type", "string"}}}}),
+    image_ = w_->AddChannel("/camera/image",
+                            schema("foxglove.CompressedImage",
+                                   {{"timestamp", kTime},
+                                    {"frame_id", {{"type", "string"}}},
+                                    {"data", {{"type", "string"}, {"contentEncoding", "base64"}}},
+                                    {"format", {{"type", "string"}}}}),
                             "json");
-    annotations_ = w_->AddChannel(
-        "/camera/annotations",
-        schema("foxglove.ImageAnnotations", {{"circles", {{"type", "array"}}}, {"points", {{"type", "array"}}}, {"texts", {{"type", "array"}}}}), "json");
+    annotations_ =
+        w_->AddChannel("/camera/annotations",
+                       schema("foxglove.ImageAnnotations", {{"circles", {{"type", "array"}}},
+                                                            {"points", {{"type", "array"}}},
+                                                            {"texts", {{"type", "array"}}}}),
+                       "json");
   }
-  scene_ = w_->AddChannel("/inhand/contacts", schema("foxglove.SceneUpdate", {{"deletions", {{"type", "array"}}}, {"entities", {{"type", "array"}}}}),
+  scene_ = w_->AddChannel("/inhand/contacts",
+                          schema("foxglove.SceneUpdate", {{"deletions", {{"type", "array"}}},
+                                                          {"entities", {{"type", "array"}}}}),
                           "json");
 }
 
@@ -98,16 +142,25 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
     const EstimateRecord& r = records[i];
     const std::string& name = p_.sets()[i].name;
     const Json pose = PoseJson(r.T_PO);
-    w_->Write(pose_channels_[i], log, Json{{"timestamp", Time(t)}, {"frame_id", "palm"}, {"pose", pose}}.dump());
-    w_->Write(tf_, log, Json{{"timestamp", Time(t)}, {"parent_frame_id", "palm"}, {"child_frame_id", "object_" + name},
-                             {"translation", pose["position"]}, {"rotation", pose["orientation"]}}.dump());
-    Json e = {{"sigma_position_mm", {r.sigma_position.x() * 1000, r.sigma_position.y() * 1000, r.sigma_position.z() * 1000}},
-              {"sigma_orientation_deg",
-               {r.sigma_orientation.x() * 180 / M_PI, r.sigma_orientation.y() * 180 / M_PI, r.sigma_orientation.z() * 180 / M_PI}},
-              {"constraints", r.constraints},
-              {"slipping", r.slipping},
-              {"features_lost", r.memory.features_lost()},
-              {"tags_elsewhere", r.memory.tag_disagreements > 0}};
+    w_->Write(pose_channels_[i], log,
+              Json{{"timestamp", Time(t)}, {"frame_id", "palm"}, {"pose", pose}}.dump());
+    w_->Write(tf_, log,
+              Json{{"timestamp", Time(t)},
+                   {"parent_frame_id", "palm"},
+                   {"child_frame_id", "object_" + name},
+                   {"translation", pose["position"]},
+                   {"rotation", pose["orientation"]}}
+                  .dump());
+    Json e = {
+        {"sigma_position_mm",
+         {r.sigma_position.x() * 1000, r.sigma_position.y() * 1000, r.sigma_position.z() * 1000}},
+        {"sigma_orientation_deg",
+         {r.sigma_orientation.x() * 180 / M_PI, r.sigma_orientation.y() * 180 / M_PI,
+          r.sigma_orientation.z() * 180 / M_PI}},
+        {"constraints", r.constraints},
+        {"slipping", r.slipping},
+        {"features_lost", r.memory.features_lost()},
+        {"tags_elsewhere", r.memory.tag_disagreements > 0}};
     if (std::isfinite(r.position_error)) {
       e["position_error_mm"] = r.position_error * 1000;
       e["orientation_error_deg"] = r.orientation_error * 180 / M_PI;
@@ -118,8 +171,13 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
   w_->Write(errors_, log, errors.dump());
   if (s.has_groundtruth()) {
     const Json pose = PoseJson(s.GroundTruthAt(t));
-    w_->Write(tf_, log, Json{{"timestamp", Time(t)}, {"parent_frame_id", "palm"}, {"child_frame_id", "object_truth"},
-                             {"translation", pose["position"]}, {"rotation", pose["orientation"]}}.dump());
+    w_->Write(tf_, log,
+              Json{{"timestamp", Time(t)},
+                   {"parent_frame_id", "palm"},
+                   {"child_frame_id", "object_truth"},
+                   {"translation", pose["position"]},
+                   {"rotation", pose["orientation"]}}
+                  .dump());
   }
   if (frame >= 0 && s.info().camera) AddFrame(frame, t);
 }
@@ -129,13 +187,23 @@ void McapExport::AddFrame(int frame, double t) {
   const CameraFrame& f = s.camera_frames()[static_cast<std::size_t>(frame)];
   const std::uint64_t log = LogTime(f.t);
   const Json camera_pose = PoseJson(f.T_PC);
-  w_->Write(tf_, log, Json{{"timestamp", Time(f.t)}, {"parent_frame_id", "palm"}, {"child_frame_id", "camera"},
-                           {"translation", camera_pose["position"]}, {"rotation", camera_pose["orientation"]}}.dump());
+  w_->Write(tf_, log,
+            Json{{"timestamp", Time(f.t)},
+                 {"parent_frame_id", "palm"},
+                 {"child_frame_id", "camera"},
+                 {"translation", camera_pose["position"]},
+                 {"rotation", camera_pose["orientation"]}}
+                .dump());
   std::ifstream in(s.Resolve(f.image), std::ios::binary);
   std::stringstream bytes;
   bytes << in.rdbuf();
   const std::string ext = f.image.substr(f.image.rfind('.') + 1);
-  w_->Write(image_, log, Json{{"timestamp", Time(f.t)}, {"frame_id", "camera"}, {"data", Base64(bytes.str())}, {"format", ext == "jpg" ? "jpeg" : ext}}.dump());
+  w_->Write(image_, log,
+            Json{{"timestamp", Time(f.t)},
+                 {"frame_id", "camera"},
+                 {"data", Base64(bytes.str())},
+                 {"format", ext == "jpg" ? "jpeg" : ext}}
+                .dump());
 
   // The overlays in image coordinates: each set's object origin and contact points, its
   // features (measured -> predicted), projected through the camera.
@@ -151,16 +219,29 @@ void McapExport::AddFrame(int frame, double t) {
     const Rgb& c = p_.sets()[i].colour;
     const Filter& filter = p_.tracker(i).filter();
     if (const auto o = project(p_.last(i).T_PO.translation())) {
-      circles.push_back({{"timestamp", Time(f.t)}, {"position", {{"x", o->x()}, {"y", o->y()}}}, {"diameter", 12.0}, {"thickness", 2.0},
-                         {"fill_color", ColorJson(c, 0.0)}, {"outline_color", ColorJson(c)}});
-      texts.push_back({{"timestamp", Time(f.t)}, {"position", {{"x", o->x() + 8}, {"y", o->y() - 8}}}, {"text", p_.sets()[i].name},
-                       {"font_size", 14.0}, {"text_color", ColorJson(c)}, {"background_color", ColorJson(Rgb{255, 255, 255}, 0.6)}});
+      circles.push_back({{"timestamp", Time(f.t)},
+                         {"position", {{"x", o->x()}, {"y", o->y()}}},
+                         {"diameter", 12.0},
+                         {"thickness", 2.0},
+                         {"fill_color", ColorJson(c, 0.0)},
+                         {"outline_color", ColorJson(c)}});
+      texts.push_back({{"timestamp", Time(f.t)},
+                       {"position", {{"x", o->x() + 8}, {"y", o->y() - 8}}},
+                       {"text", p_.sets()[i].name},
+                       {"font_size", 14.0},
+                       {"text_color", ColorJson(c)},
+                       {"background_color", ColorJson(Rgb{255, 255, 255}, 0.6)}});
     }
     Json contact_points = Json::array();
     for (const auto& contact : filter.trace().contacts)
-      if (const auto u = project(contact.c_o_P)) contact_points.push_back({{"x", u->x()}, {"y", u->y()}});
+      if (const auto u = project(contact.c_o_P))
+        contact_points.push_back({{"x", u->x()}, {"y", u->y()}});
     if (!contact_points.empty())
-      points.push_back({{"timestamp", Time(f.t)}, {"type", 1}, {"points", contact_points}, {"outline_color", ColorJson(c)}, {"thickness", 6.0}});
+      points.push_back({{"timestamp", Time(f.t)},
+                        {"type", 1},
+                        {"points", contact_points},
+                        {"outline_color", ColorJson(c)},
+                        {"thickness", 6.0}});
     Json lines = Json::array();
     for (const auto& v : filter.trace().visual) {
       const Vec2 a = K.Distort(v.measured), b = K.Distort(v.predicted);
@@ -168,9 +249,14 @@ void McapExport::AddFrame(int frame, double t) {
       lines.push_back({{"x", b.x()}, {"y", b.y()}});
     }
     if (!lines.empty())
-      points.push_back({{"timestamp", Time(f.t)}, {"type", 4}, {"points", lines}, {"outline_color", ColorJson(c)}, {"thickness", 1.5}});  // 4: LINE_LIST
+      points.push_back({{"timestamp", Time(f.t)},
+                        {"type", 4},
+                        {"points", lines},
+                        {"outline_color", ColorJson(c)},
+                        {"thickness", 1.5}});  // 4: LINE_LIST
   }
-  w_->Write(annotations_, log, Json{{"circles", circles}, {"points", points}, {"texts", texts}}.dump());
+  w_->Write(annotations_, log,
+            Json{{"circles", circles}, {"points", points}, {"texts", texts}}.dump());
 
   // Contacts and forces in 3-D: a sphere per contact, an arrow per force (1 cm per newton).
   Json entities = Json::array();
@@ -178,16 +264,27 @@ void McapExport::AddFrame(int frame, double t) {
     const Rgb& c = p_.sets()[i].colour;
     Json spheres = Json::array(), arrows = Json::array();
     for (const auto& contact : p_.tracker(i).filter().trace().contacts) {
-      spheres.push_back({{"pose", PoseJson(MakeTransform(contact.c_o_P, Quat::Identity()))}, {"size", {{"x", 0.004}, {"y", 0.004}, {"z", 0.004}}},
+      spheres.push_back({{"pose", PoseJson(MakeTransform(contact.c_o_P, Quat::Identity()))},
+                         {"size", {{"x", 0.004}, {"y", 0.004}, {"z", 0.004}}},
                          {"color", ColorJson(c)}});
       const double n = contact.force_P.norm();
       if (n > 1e-6)
-        arrows.push_back({{"pose", PoseJson(MakeTransform(contact.c_o_P, Quat::FromTwoVectors(Vec3::UnitX(), contact.force_P / n)))},
-                          {"shaft_length", 0.01 * n}, {"shaft_diameter", 0.0015}, {"head_length", 0.004}, {"head_diameter", 0.003},
+        arrows.push_back({{"pose", PoseJson(MakeTransform(
+                                       contact.c_o_P,
+                                       Quat::FromTwoVectors(Vec3::UnitX(), contact.force_P / n)))},
+                          {"shaft_length", 0.01 * n},
+                          {"shaft_diameter", 0.0015},
+                          {"head_length", 0.004},
+                          {"head_diameter", 0.003},
                           {"color", ColorJson(c)}});
     }
-    entities.push_back({{"timestamp", Time(t)}, {"frame_id", "palm"}, {"id", "contacts_" + p_.sets()[i].name}, {"lifetime", {{"sec", 0}, {"nsec", 0}}},
-                        {"frame_locked", false}, {"spheres", spheres}, {"arrows", arrows}});
+    entities.push_back({{"timestamp", Time(t)},
+                        {"frame_id", "palm"},
+                        {"id", "contacts_" + p_.sets()[i].name},
+                        {"lifetime", {{"sec", 0}, {"nsec", 0}}},
+                        {"frame_locked", false},
+                        {"spheres", spheres},
+                        {"arrows", arrows}});
   }
   w_->Write(scene_, log, Json{{"deletions", Json::array()}, {"entities", entities}}.dump());
 }

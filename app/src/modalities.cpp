@@ -9,7 +9,8 @@ namespace inhand::app {
 namespace {
 
 constexpr const char* kExpected =
-    "expected j followed by any of t (torques), a (AprilTags), f (extracted features): j, jt, ja, jf, jta, jtf, jaf, jtaf";
+    "expected j followed by any of t (torques), a (AprilTags), f (extracted features): j, jt, ja, "
+    "jf, jta, jtf, jaf, jtaf";
 
 }  // namespace
 
@@ -26,12 +27,19 @@ Rgb ModalityColour(const std::string& name) {
 }
 
 ModalitySet ParseModalitySet(const std::string& text) {
-  if (text.empty() || text[0] != 'j') throw InputError("--modalities: '" + text + "': " + kExpected);
+  if (text.empty() || text[0] != 'j')
+    throw InputError("--modalities: '" + text + "': " + kExpected);
   ModalitySet s;
   for (std::size_t i = 1; i < text.size(); ++i) {
-    bool* flag = text[i] == 't' ? &s.torque : text[i] == 'a' ? &s.tags : text[i] == 'f' ? &s.features : nullptr;
-    if (flag == nullptr) throw InputError("--modalities: '" + text + "': unknown letter '" + text[i] + "'; " + kExpected);
-    if (*flag) throw InputError("--modalities: '" + text + "': letter '" + text[i] + "' given twice");
+    bool* flag = text[i] == 't'   ? &s.torque
+                 : text[i] == 'a' ? &s.tags
+                 : text[i] == 'f' ? &s.features
+                                  : nullptr;
+    if (flag == nullptr)
+      throw InputError("--modalities: '" + text + "': unknown letter '" + text[i] + "'; " +
+                       kExpected);
+    if (*flag)
+      throw InputError("--modalities: '" + text + "': letter '" + text[i] + "' given twice");
     *flag = true;
   }
   // One name per combination, in the paper's letter order (jat is jta).
@@ -47,7 +55,8 @@ std::vector<ModalitySet> ParseModalities(const std::string& list) {
   while (std::getline(ss, text, ',')) {
     out.push_back(ParseModalitySet(text));
     for (std::size_t i = 0; i + 1 < out.size(); ++i)
-      if (out[i].name == out.back().name) throw InputError("--modalities: set '" + out.back().name + "' is listed twice");
+      if (out[i].name == out.back().name)
+        throw InputError("--modalities: set '" + out.back().name + "' is listed twice");
   }
   if (out.empty()) throw InputError("--modalities: empty list");
   return out;

@@ -1,10 +1,10 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
-#include <limits>
+#include <functional>
 #include <iomanip>
 #include <iostream>
-#include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 
@@ -65,23 +65,20 @@ int PrintHand(const HandModel& hand, bool as_json) {
     for (const Link& link : hand.links) {
       std::size_t tris = 0;
       for (const TriangleMesh& m : link.visual) tris += m.num_triangles();
-      links.push_back({{"name", link.name},
-                       {"parent_joint", link.parent_joint >= 0 ? Json(hand.joints[link.parent_joint].name) : Json(nullptr)},
-                       {"visual_triangles", tris},
-                       {"pieces", PiecesJson(link.collision)},
-                       {"visual_from_collision", link.visual_from_collision},
-                       {"collision_from_visual", link.collision_from_visual}});
+      links.push_back(
+          {{"name", link.name},
+           {"parent_joint",
+            link.parent_joint >= 0 ? Json(hand.joints[link.parent_joint].name) : Json(nullptr)},
+           {"visual_triangles", tris},
+           {"pieces", PiecesJson(link.collision)},
+           {"visual_from_collision", link.visual_from_collision},
+           {"collision_from_visual", link.collision_from_visual}});
     }
-    Json out = {{"kind", "hand"},
-                {"name", hand.name},
-                {"source", hand.source},
-                {"palm_link", hand.links[hand.root_link].name},
-                {"joints", joints},
-                {"mimic_joints", mimic},
-                {"links", links},
-                {"pieces", hand.NumCollisionPieces()},
-                {"triangles", triangles},
-                {"mesh_files", hand.mesh_files}};
+    Json out = {{"kind", "hand"},         {"name", hand.name},
+                {"source", hand.source},  {"palm_link", hand.links[hand.root_link].name},
+                {"joints", joints},       {"mimic_joints", mimic},
+                {"links", links},         {"pieces", hand.NumCollisionPieces()},
+                {"triangles", triangles}, {"mesh_files", hand.mesh_files}};
     std::cout << out.dump(2) << "\n";
     return 0;
   }
@@ -93,8 +90,8 @@ int PrintHand(const HandModel& hand, bool as_json) {
     std::cout << "  " << std::setw(3) << i << "  " << std::left << std::setw(24) << joint.name
               << std::setw(11) << JointTypeName(joint.type) << std::right;
     if (joint.has_limits)
-      std::cout << "[" << std::fixed << std::setprecision(3) << std::setw(7) << joint.lower
-                << ", " << std::setw(7) << joint.upper << "]";
+      std::cout << "[" << std::fixed << std::setprecision(3) << std::setw(7) << joint.lower << ", "
+                << std::setw(7) << joint.upper << "]";
     else
       std::cout << "unlimited";
     std::cout << std::defaultfloat << "\n";
@@ -115,8 +112,8 @@ int PrintHand(const HandModel& hand, bool as_json) {
               << (link.visual_from_collision ? "  (visual from collision)" : "")
               << (link.collision_from_visual ? "  (collision from visual)" : "") << "\n";
   }
-  std::cout << "\ntotal: " << triangles << " visual triangles, " << all.size()
-            << " convex pieces (" << KindsSummary(all) << ")\n"
+  std::cout << "\ntotal: " << triangles << " visual triangles, " << all.size() << " convex pieces ("
+            << KindsSummary(all) << ")\n"
             << hand.mesh_files.size() << " mesh files:\n";
   for (const std::string& f : hand.mesh_files) std::cout << "  " << f << "\n";
   return 0;
@@ -154,30 +151,34 @@ int PrintObject(const ObjectModel& obj, bool as_json) {
   if (as_json) {
     Json tags = Json::array();
     for (const TagPlacement& t : obj.tags)
-      tags.push_back({{"family", t.family}, {"id", t.id}, {"size", t.size}, {"pose", jsonf::PoseToJson(t.T_OT)}});
+      tags.push_back({{"family", t.family},
+                      {"id", t.id},
+                      {"size", t.size},
+                      {"pose", jsonf::PoseToJson(t.T_OT)}});
     Json field_json = nullptr;
     if (field)
       field_json = {{"source", field->source},
                     {"spacing", field->spacing},
                     {"dims", {field->dims[0], field->dims[1], field->dims[2]}},
                     {"cache_file", obj.field_cache}};
-    Json out = {{"kind", "object"},
-                {"name", obj.name},
-                {"source", obj.source},
-                {"mass", obj.mass},
-                {"com", {obj.com_O.x(), obj.com_O.y(), obj.com_O.z()}},
-                {"inertia_diagonal", {obj.inertia_com(0, 0), obj.inertia_com(1, 1), obj.inertia_com(2, 2)}},
-                {"size", {box.Size().x(), box.Size().y(), box.Size().z()}},
-                {"pieces", obj.pieces.size()},
-                {"piece_size_range", {ps.smallest, ps.largest}},
-                {"pieces_volume", ps.pieces_volume},
-                {"mesh_volume", ps.mesh_closed ? Json(ps.mesh_volume) : Json(nullptr)},
-                {"piece_list", PiecesJson(obj.pieces)},
-                {"decomposition", obj.decomposition},
-                {"contact_field", field_json},
-                {"triangles", obj.NumVisualTriangles()},
-                {"mesh_files", obj.mesh_files},
-                {"tags", tags}};
+    Json out = {
+        {"kind", "object"},
+        {"name", obj.name},
+        {"source", obj.source},
+        {"mass", obj.mass},
+        {"com", {obj.com_O.x(), obj.com_O.y(), obj.com_O.z()}},
+        {"inertia_diagonal", {obj.inertia_com(0, 0), obj.inertia_com(1, 1), obj.inertia_com(2, 2)}},
+        {"size", {box.Size().x(), box.Size().y(), box.Size().z()}},
+        {"pieces", obj.pieces.size()},
+        {"piece_size_range", {ps.smallest, ps.largest}},
+        {"pieces_volume", ps.pieces_volume},
+        {"mesh_volume", ps.mesh_closed ? Json(ps.mesh_volume) : Json(nullptr)},
+        {"piece_list", PiecesJson(obj.pieces)},
+        {"decomposition", obj.decomposition},
+        {"contact_field", field_json},
+        {"triangles", obj.NumVisualTriangles()},
+        {"mesh_files", obj.mesh_files},
+        {"tags", tags}};
     std::cout << out.dump(2) << "\n";
     return 0;
   }
@@ -191,21 +192,22 @@ int PrintObject(const ObjectModel& obj, bool as_json) {
             << (ps.mesh_closed ? "closed" : "not closed: no volume") << ")\n"
             << obj.pieces.size() << " convex pieces (" << KindsSummary(pieces) << "), from "
             << obj.decomposition << "\n"
-            << std::setprecision(1) << "  piece size " << ps.smallest * 1e3 << " .. " << ps.largest * 1e3
-            << " mm; volume " << ps.pieces_volume * 1e6 << " cm3";
+            << std::setprecision(1) << "  piece size " << ps.smallest * 1e3 << " .. "
+            << ps.largest * 1e3 << " mm; volume " << ps.pieces_volume * 1e6 << " cm3";
   if (ps.mesh_closed)
     std::cout << " against the mesh's " << ps.mesh_volume * 1e6 << " cm3 (" << std::setprecision(0)
               << 100.0 * ps.pieces_volume / ps.mesh_volume << " %)";
   std::cout << "\ncontacts: ";
   if (field)
     std::cout << "signed distance field of the " << field->source << ", " << std::setprecision(2)
-              << field->spacing * 1e3 << " mm grid " << field->dims[0] << " x " << field->dims[1] << " x "
-              << field->dims[2] << "\n  cache " << obj.field_cache;
+              << field->spacing * 1e3 << " mm grid " << field->dims[0] << " x " << field->dims[1]
+              << " x " << field->dims[2] << "\n  cache " << obj.field_cache;
   else
     std::cout << "GJK against each piece";
   std::cout << "\n" << obj.tags.size() << " AprilTags";
   for (const TagPlacement& t : obj.tags)
-    std::cout << "\n  " << t.family << " id " << t.id << ", " << std::setprecision(1) << t.size * 1000.0 << " mm";
+    std::cout << "\n  " << t.family << " id " << t.id << ", " << std::setprecision(1)
+              << t.size * 1000.0 << " mm";
   std::cout << std::defaultfloat << "\n" << obj.mesh_files.size() << " mesh files:\n";
   for (const std::string& f : obj.mesh_files) std::cout << "  " << f << "\n";
   return 0;
@@ -230,12 +232,14 @@ ObjectModel PiecesAsObject(const ObjectModel& obj) {
 
 // Three views around the model's bounding box, side by side, with captions.
 void RenderPreview(const std::string& path, const std::array<std::string, 3>& titles,
-                   const std::function<void(Renderer&, Scene&, int view)>& populate, const Aabb& box) {
+                   const std::function<void(Renderer&, Scene&, int view)>& populate,
+                   const Aabb& box) {
   Renderer renderer;
   const double radius = std::max(0.5 * box.Size().norm(), 0.02);
   const double distance = 1.15 * radius / std::sin(20.0 * M_PI / 180.0);
   std::vector<Image8> views;
-  const std::vector<std::pair<double, double>> angles = {{-0.5 * M_PI, 0.35}, {0.0, 0.35}, {0.6, 1.2}};
+  const std::vector<std::pair<double, double>> angles = {
+      {-0.5 * M_PI, 0.35}, {0.0, 0.35}, {0.6, 1.2}};
   for (const auto& [azimuth, elevation] : angles) {
     Scene scene;
     scene.K = IntrinsicsFromFov(480, 480, 40.0);
@@ -246,7 +250,8 @@ void RenderPreview(const std::string& path, const std::array<std::string, 3>& ti
     renderer.Render(scene, out, false);
     views.push_back(out.colour);
   }
-  const Image8 all = SideBySide({&views[0], &views[1], &views[2]}, {titles[0], titles[1], titles[2]});
+  const Image8 all =
+      SideBySide({&views[0], &views[1], &views[2]}, {titles[0], titles[1], titles[2]});
   WriteImage(path, all);
 }
 
@@ -273,13 +278,15 @@ int RunModel(const ModelCommand& cmd) {
       // The object as it looks, then its pieces in distinct colours from the side and above.
       const ObjectModel pieces = PiecesAsObject(object);
       std::vector<int> object_meshes, piece_meshes;
-      RenderPreview(cmd.render, {object.name, std::to_string(object.pieces.size()) + " pieces, side", "pieces, above"},
-                    [&](Renderer& r, Scene& s, int view) {
-                      std::vector<int>& meshes = view == 0 ? object_meshes : piece_meshes;
-                      if (meshes.empty()) meshes = UploadObject(r, view == 0 ? object : pieces);
-                      AddObject(s, meshes, Transform::Identity());
-                    },
-                    object.Bounds());
+      RenderPreview(
+          cmd.render,
+          {object.name, std::to_string(object.pieces.size()) + " pieces, side", "pieces, above"},
+          [&](Renderer& r, Scene& s, int view) {
+            std::vector<int>& meshes = view == 0 ? object_meshes : piece_meshes;
+            if (meshes.empty()) meshes = UploadObject(r, view == 0 ? object : pieces);
+            AddObject(s, meshes, Transform::Identity());
+          },
+          object.Bounds());
     }
     return code;
   }
@@ -293,7 +300,8 @@ int RunModel(const ModelCommand& cmd) {
     for (int i = 0; i < hand.num_q(); ++i) {
       const Joint& j = hand.joints[hand.q_joints[i]];
       q[i] = j.has_limits ? j.lower + (j.upper - j.lower) / 3.0 : 0.0;
-      if (j.has_limits && j.lower <= 0.0 && j.upper >= 0.0 && j.upper - j.lower < 1.0) q[i] = 0.0;  // abduction-like
+      if (j.has_limits && j.lower <= 0.0 && j.upper >= 0.0 && j.upper - j.lower < 1.0)
+        q[i] = 0.0;  // abduction-like
     }
     KinematicsData kin(hand);
     kin.Update(hand, q);
@@ -302,12 +310,13 @@ int RunModel(const ModelCommand& cmd) {
       for (const TriangleMesh& m : hand.links[l].visual)
         for (const Vec3& v : m.vertices) box.Extend(kin.T_PL(static_cast<int>(l)) * v);
     std::optional<HandMeshes> meshes;
-    RenderPreview(cmd.render, {hand.name, "side", "above"},
-                  [&](Renderer& r, Scene& s, int) {
-                    if (!meshes) meshes = UploadHand(r, hand);
-                    AddHand(s, *meshes, kin.link_poses(), 1.0, true);
-                  },
-                  box);
+    RenderPreview(
+        cmd.render, {hand.name, "side", "above"},
+        [&](Renderer& r, Scene& s, int) {
+          if (!meshes) meshes = UploadHand(r, hand);
+          AddHand(s, *meshes, kin.link_poses(), 1.0, true);
+        },
+        box);
   }
   return code;
 }

@@ -61,7 +61,8 @@ struct SetStats {
 class Pictures {
  public:
   using Emit = std::function<void(FrameComposer&, const PictureState&, int)>;
-  Pictures(const SessionPlayer& player, bool threaded, Emit emit) : player_(player), emit_(std::move(emit)) {
+  Pictures(const SessionPlayer& player, bool threaded, Emit emit)
+      : player_(player), emit_(std::move(emit)) {
     if (!threaded) {
       composer_ = std::make_unique<FrameComposer>(player_);
       return;
@@ -141,20 +142,26 @@ int RunReplay(const ReplayCommand& cmd) {
   Session session = Session::Load(cmd.session);
   TrackerParams params;
   if (!cmd.params.empty()) params = ReadTrackerParams(cmd.params);
-  SessionPlayer player(session, params, cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
+  SessionPlayer player(
+      session, params,
+      cmd.modalities.empty() ? std::vector<ModalitySet>() : ParseModalities(cmd.modalities));
   const std::vector<ModalitySet>& sets = player.sets();
   const bool has_camera = session.info().camera.has_value();
   // Without a camera the video is the external 3-D view at --video-fps.
   const bool want_pictures = !cmd.no_video || cmd.frames;
-  if (!(cmd.video_fps > 0.0 && cmd.video_fps <= 240.0)) throw InputError("--video-fps: expected a rate in (0, 240] Hz");
-  if (cmd.jobs < 1 || cmd.jobs > 64) throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
-  for (const std::string& w : player.input_report().Warnings(session, player.models(), player.params()))
+  if (!(cmd.video_fps > 0.0 && cmd.video_fps <= 240.0))
+    throw InputError("--video-fps: expected a rate in (0, 240] Hz");
+  if (cmd.jobs < 1 || cmd.jobs > 64)
+    throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
+  for (const std::string& w :
+       player.input_report().Warnings(session, player.models(), player.params()))
     std::cerr << "inhand: warning: " << w << "\n";
 
   StagedOutput out(cmd.out, {cmd.session, cmd.params}, "replay");
   if (cmd.frames) fs::create_directories(out / "frames");
   std::ofstream csv(out / "estimates.csv");
-  csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,position_error_mm,orientation_error_deg";
+  csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,"
+         "position_error_mm,orientation_error_deg";
   for (const std::string& n : session.joint_names()) csv << ",bias:" << n;
   csv << "\n";
 
@@ -163,13 +170,17 @@ int RunReplay(const ReplayCommand& cmd) {
   if (cmd.mcap) mcap = std::make_unique<McapExport>((out / "replay.mcap").string(), player);
   const auto& frames = session.camera_frames();
   const int n = session.num_samples();
-  const double fps = !has_camera ? cmd.video_fps : frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t) : 10.0;
+  const double fps = !has_camera         ? cmd.video_fps
+                     : frames.size() > 1 ? 1.0 / (frames[1].t - frames[0].t)
+                                         : 10.0;
   double next_picture_t = n > 0 ? session.t(0) : 0.0;
   int pictures = 0;
   const auto emit = [&](FrameComposer& composer, const PictureState& state, int index) {
     const Image8 picture = has_camera ? composer.Compose(state) : composer.ComposeExternal(state);
     if (!cmd.no_video) {
-      if (!video) video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width, picture.height);
+      if (!video)
+        video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width,
+                                              picture.height);
       video->Write(picture);
     }
     if (cmd.frames) {
@@ -200,22 +211,28 @@ int RunReplay(const ReplayCommand& cmd) {
         const EstimateRecord& r = row[i];
         // The filter lets nothing non-finite into its state; should it ever, no output pretends
         // otherwise.
-        if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() || !r.sigma_orientation.allFinite())
-          throw InputError(cmd.session + ": set " + sets[i].name + " has a non-finite estimate at t = " + FormatDouble(r.t) +
+        if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() ||
+            !r.sigma_orientation.allFinite())
+          throw InputError(cmd.session + ": set " + sets[i].name +
+                           " has a non-finite estimate at t = " + FormatDouble(r.t) +
                            " s (a bug: please report it with this session)");
         const Quat q(r.T_PO.linear());
         const Vec3& p = r.T_PO.translation();
         csv << FormatDouble(r.t) << "," << sets[i].name;
-        for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.sigma_position.x(), r.sigma_position.y(),
-                         r.sigma_position.z(), r.sigma_orientation.x(), r.sigma_orientation.y(), r.sigma_orientation.z()})
+        for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.sigma_position.x(),
+                         r.sigma_position.y(), r.sigma_position.z(), r.sigma_orientation.x(),
+                         r.sigma_orientation.y(), r.sigma_orientation.z()})
           csv << "," << FormatDouble(v);
         csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
-            << "," << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "");
+            << ","
+            << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI)
+                                                   : "");
         for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
         csv << "\n";
         SetStats& st = stats[i];
         if (s > 0) st.step_us.push_back(r.step_time_us);
-        if (r.visual_ms >= 0.0) st.visual_ms.push_back(r.visual_ms), st.features_used += r.visual_used;
+        if (r.visual_ms >= 0.0)
+          st.visual_ms.push_back(r.visual_ms), st.features_used += r.visual_used;
         st.constraints += r.constraints;
         if (std::isfinite(r.nees)) st.nees.push_back(r.nees);
         if (std::isfinite(r.position_error)) {
@@ -231,7 +248,8 @@ int RunReplay(const ReplayCommand& cmd) {
     k += count;
     const double t = session.t(k - 1);
     // The camera frame the block's last sample processed, if any.
-    if (const int frame = player.last_frame(); frame >= 0 && drawn && has_camera) drawn->Add(FrameComposer::Capture(player, frame, t), frame);
+    if (const int frame = player.last_frame(); frame >= 0 && drawn && has_camera)
+      drawn->Add(FrameComposer::Capture(player, frame, t), frame);
     // No camera: a picture of the 3-D view whenever the video's clock passes a sample.
     if (drawn && !has_camera && t >= next_picture_t - 1e-9) {
       drawn->Add(FrameComposer::Capture(player, -1, t), pictures++);
@@ -241,7 +259,8 @@ int RunReplay(const ReplayCommand& cmd) {
     if (tty && (percent != shown || k == n)) {
       shown = percent;
       const int width = 40, done = static_cast<int>(std::lround(width * double(k) / n));
-      std::fprintf(stderr, "\rreplay [%s%s] %3d%%", std::string(static_cast<std::size_t>(done), '#').c_str(),
+      std::fprintf(stderr, "\rreplay [%s%s] %3d%%",
+                   std::string(static_cast<std::size_t>(done), '#').c_str(),
                    std::string(static_cast<std::size_t>(width - done), ' ').c_str(), percent);
     }
   }
@@ -251,19 +270,23 @@ int RunReplay(const ReplayCommand& cmd) {
   if (mcap) mcap->Close();
   csv.close();
 
-  Json summary = {{"session", fs::absolute(cmd.session).lexically_normal().string()},
-                  {"session_name", session.info().name},
-                  {"samples", n},
-                  {"camera_frames", frames.size()},
-                  {"video", video ? "replay.mp4" : Json(nullptr)},
-                  {"mcap", mcap ? "replay.mcap" : Json(nullptr)},
-                  {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
-                  {"parameters", Json::parse(TrackerParamsToJson(player.params()))},
-                  // What the sets with torques undeflected the joints with (null: rigid joints).
-                  {"joint_stiffness", session.info().joint_stiffness.empty() ? Json(nullptr) : Json(session.info().joint_stiffness)},
-                  {"joint_samples_rejected", player.input_report().rejected_samples.size()},
-                  {"frames_before_first_sample", player.input_report().frames_before_first_sample},
-                  {"samples_without_truth", player.input_report().samples_without_truth}};
+  Json summary = {
+      {"session", fs::absolute(cmd.session).lexically_normal().string()},
+      {"session_name", session.info().name},
+      {"samples", n},
+      {"camera_frames", frames.size()},
+      {"video", video ? "replay.mp4" : Json(nullptr)},
+      {"mcap", mcap ? "replay.mcap" : Json(nullptr)},
+      {"wall_time_s",
+       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()},
+      {"parameters", Json::parse(TrackerParamsToJson(player.params()))},
+      // What the sets with torques undeflected the joints with (null: rigid joints).
+      {"joint_stiffness", session.info().joint_stiffness.empty()
+                              ? Json(nullptr)
+                              : Json(session.info().joint_stiffness)},
+      {"joint_samples_rejected", player.input_report().rejected_samples.size()},
+      {"frames_before_first_sample", player.input_report().frames_before_first_sample},
+      {"samples_without_truth", player.input_report().samples_without_truth}};
   Json per_set = Json::object();
   for (std::size_t i = 0; i < sets.size(); ++i) {
     const SetStats& st = stats[i];
@@ -272,7 +295,8 @@ int RunReplay(const ReplayCommand& cmd) {
               {"features", sets[i].features},
               {"step_time_us_median", Median(st.step_us)},
               {"step_time_us_p95", Percentile(st.step_us, 0.95)},
-              {"visual_step_ms_median", st.visual_ms.empty() ? Json(nullptr) : Json(Median(st.visual_ms))},
+              {"visual_step_ms_median",
+               st.visual_ms.empty() ? Json(nullptr) : Json(Median(st.visual_ms))},
               {"visual_updates", st.visual_ms.size()},
               {"features_used", st.features_used},
               {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
@@ -287,7 +311,8 @@ int RunReplay(const ReplayCommand& cmd) {
       // At the last sample the ground truth covers.
       s["terminal_position_error_mm"] = st.last_with_truth.position_error * 1000;
       s["terminal_orientation_error_deg"] = st.last_with_truth.orientation_error * 180 / M_PI;
-      const Vec3 dp = st.last_with_truth.position_error_O * 1000, dr = st.last_with_truth.orientation_error_O * (180 / M_PI);
+      const Vec3 dp = st.last_with_truth.position_error_O * 1000,
+                 dr = st.last_with_truth.orientation_error_O * (180 / M_PI);
       s["terminal_position_error_object_axes_mm"] = {dp.x(), dp.y(), dp.z()};
       s["terminal_orientation_error_object_axes_deg"] = {dr.x(), dr.y(), dr.z()};
       s["rms_position_error_mm"] = std::sqrt(st.sq_pos / st.with_truth) * 1000;
@@ -297,7 +322,8 @@ int RunReplay(const ReplayCommand& cmd) {
       long inside = 0;
       for (double v : st.nees) mean += v, inside += v >= 1.237 && v <= 14.449;
       s["nees_mean"] = st.nees.empty() ? 0.0 : mean / static_cast<double>(st.nees.size());
-      s["nees_within_95_percent_bounds"] = st.nees.empty() ? 0.0 : double(inside) / static_cast<double>(st.nees.size());
+      s["nees_within_95_percent_bounds"] =
+          st.nees.empty() ? 0.0 : double(inside) / static_cast<double>(st.nees.size());
     }
     per_set[sets[i].name] = s;
   }
@@ -306,14 +332,17 @@ int RunReplay(const ReplayCommand& cmd) {
   std::ofstream(out / "params.json") << TrackerParamsToJson(player.params()) << "\n";
   out.Commit();
 
-  std::cout << "replay of " << session.info().name << " (" << n << " samples, " << frames.size() << " frames) written to " << cmd.out << "\n";
+  std::cout << "replay of " << session.info().name << " (" << n << " samples, " << frames.size()
+            << " frames) written to " << cmd.out << "\n";
   for (std::size_t i = 0; i < sets.size(); ++i) {
     const Json& s = per_set[sets[i].name];
     std::cout << "  " << sets[i].name << ": ";
     if (s.contains("terminal_position_error_mm"))
-      std::cout << "terminal error " << std::fixed << std::setprecision(1) << s["terminal_position_error_mm"].get<double>() << " mm / "
+      std::cout << "terminal error " << std::fixed << std::setprecision(1)
+                << s["terminal_position_error_mm"].get<double>() << " mm / "
                 << s["terminal_orientation_error_deg"].get<double>() << " deg, ";
-    std::cout << "median step " << std::setprecision(0) << s["step_time_us_median"].get<double>() << " us\n";
+    std::cout << "median step " << std::setprecision(0) << s["step_time_us_median"].get<double>()
+              << " us\n";
   }
   return 0;
 }

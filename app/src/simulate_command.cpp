@@ -14,7 +14,8 @@ int RunSimulate(const SimulateCommand& cmd) {
                 << std::setprecision(1) << s.duration << " s  " << s.description << "\n";
     return 0;
   }
-  if (cmd.scenario.empty()) throw InputError("simulate: give a SCENARIO (see inhand simulate --list)");
+  if (cmd.scenario.empty())
+    throw InputError("simulate: give a SCENARIO (see inhand simulate --list)");
   if (cmd.out.empty()) throw InputError("simulate: --out DIR is required");
   SimulateOptions options;
   options.scenario = cmd.scenario;
@@ -29,13 +30,16 @@ int RunSimulate(const SimulateCommand& cmd) {
     options.effects = e;
   }
   const SimulationSummary s = Simulate(options);
-  std::cout << std::fixed << std::setprecision(3) << "session " << s.session_dir << ": " << s.duration << " s simulated in "
-            << s.wall_time << " s (" << s.wall_time / s.duration << "x real time), " << s.joint_samples
-            << " joint samples, " << s.camera_frames << " camera frames\n"
-            << std::setprecision(2) << "max penetration " << s.max_penetration * 1000 << " mm, held "
-            << 100 * s.held_fraction << " % of the time after the grasp, in-hand rotation " << s.tilt_in_hand_deg
-            << " deg at the end (max " << s.max_in_hand_rotation_deg << "), travel before the grasp "
-            << s.table_travel_before_grasp * 1000 << " mm, lifted " << s.lift_height * 1000 << " mm\n";
+  std::cout << std::fixed << std::setprecision(3) << "session " << s.session_dir << ": "
+            << s.duration << " s simulated in " << s.wall_time << " s (" << s.wall_time / s.duration
+            << "x real time), " << s.joint_samples << " joint samples, " << s.camera_frames
+            << " camera frames\n"
+            << std::setprecision(2) << "max penetration " << s.max_penetration * 1000
+            << " mm, held " << 100 * s.held_fraction
+            << " % of the time after the grasp, in-hand rotation " << s.tilt_in_hand_deg
+            << " deg at the end (max " << s.max_in_hand_rotation_deg
+            << "), travel before the grasp " << s.table_travel_before_grasp * 1000 << " mm, lifted "
+            << s.lift_height * 1000 << " mm\n";
   if (const Effects effects = EffectsOf(options); effects.Any()) {
     std::cout << "realism effects:";
     for (const std::string& n : effects.Names()) std::cout << " " << n;

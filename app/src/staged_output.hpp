@@ -14,7 +14,9 @@ class StagedOutput {
  public:
   // `inputs`: what the command reads (never replaced, nor their ancestors).
   StagedOutput(const std::string& out, const std::vector<std::string>& inputs, std::string command)
-      : final_(CheckOutputFolder(out, inputs)), tmp_(PrepareStaging(final_)), command_(std::move(command)) {}
+      : final_(CheckOutputFolder(out, inputs)),
+        tmp_(PrepareStaging(final_)),
+        command_(std::move(command)) {}
   ~StagedOutput() {
     std::error_code ec;
     if (!committed_) std::filesystem::remove_all(tmp_, ec);

@@ -24,18 +24,23 @@ int RunTags(const TagsCommand& cmd) {
     for (const TagDetection& d : found) {
       jsonf::Json corners = jsonf::Json::array();
       for (const Vec2& c : d.corners) corners.push_back({c.x() + 0.5, c.y() + 0.5});
-      detections.push_back({{"id", d.id}, {"family", d.family}, {"corners", corners},
+      detections.push_back({{"id", d.id},
+                            {"family", d.family},
+                            {"corners", corners},
                             {"center", {d.center.x() + 0.5, d.center.y() + 0.5}},
-                            {"decision_margin", d.decision_margin}, {"hamming", d.hamming}});
+                            {"decision_margin", d.decision_margin},
+                            {"hamming", d.hamming}});
     }
     std::cout << jsonf::Json{{"image", cmd.image}, {"detections", detections}}.dump(2) << "\n";
     return 0;
   }
-  std::cout << found.size() << " " << cmd.family << " tags in " << cmd.image << " (corners: bottom-left, bottom-right, top-right, top-left)\n";
+  std::cout << found.size() << " " << cmd.family << " tags in " << cmd.image
+            << " (corners: bottom-left, bottom-right, top-right, top-left)\n";
   for (const TagDetection& d : found) {
     std::cout << std::fixed << std::setprecision(4) << d.id;
     for (const Vec2& c : d.corners) std::cout << ", (" << c.x() + 0.5 << " " << c.y() + 0.5 << ")";
-    std::cout << std::setprecision(1) << "   margin " << d.decision_margin << ", hamming " << d.hamming << "\n";
+    std::cout << std::setprecision(1) << "   margin " << d.decision_margin << ", hamming "
+              << d.hamming << "\n";
   }
   return 0;
 }

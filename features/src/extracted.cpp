@@ -13,33 +13,43 @@ namespace inhand {
 
 void FeatureParams::Validate() const {
   const auto fail = [](const char* field, double v, const char* expected) {
-    throw InputError(std::string("feature parameter '") + field + "' is " + std::to_string(v) + ", expected " + expected);
+    throw InputError(std::string("feature parameter '") + field + "' is " + std::to_string(v) +
+                     ", expected " + expected);
   };
   if (!(canny_low > 0 && canny_high > canny_low)) fail("canny_high", canny_high, "> canny_low > 0");
   if (!(blur_sigma >= 0 && blur_sigma <= 10)) fail("blur_sigma", blur_sigma, "in [0, 10]");
   if (harris_block < 2 || harris_block > 31) fail("harris_block", harris_block, "in [2, 31]");
-  if (!(harris_relative > 0 && harris_relative < 1)) fail("harris_relative", harris_relative, "in (0, 1)");
+  if (!(harris_relative > 0 && harris_relative < 1))
+    fail("harris_relative", harris_relative, "in (0, 1)");
   if (max_corners < 1 || max_corners > 1000) fail("max_corners", max_corners, "in [1, 1000]");
-  if (occluder_clearance < 0 || occluder_clearance > 100) fail("occluder_clearance", occluder_clearance, "in [0, 100]");
+  if (occluder_clearance < 0 || occluder_clearance > 100)
+    fail("occluder_clearance", occluder_clearance, "in [0, 100]");
   if (piece_radius < 3 || piece_radius > 100) fail("piece_radius", piece_radius, "in [3, 100]");
   if (search_radius < 1 || search_radius > 200) fail("search_radius", search_radius, "in [1, 200]");
-  if (max_search_radius < search_radius || max_search_radius > 200) fail("max_search_radius", max_search_radius, "in [search_radius, 200]");
-  if (global_search_radius < 0 || global_search_radius > 200) fail("global_search_radius", global_search_radius, "in [0, 200]");
-  if (!(global_truncation >= 1 && global_truncation <= 100)) fail("global_truncation", global_truncation, "in [1, 100]");
-  if (orientation_bins < 1 || orientation_bins > 64) fail("orientation_bins", orientation_bins, "in [1, 64]");
-  if (!(min_vote_fraction > 0 && min_vote_fraction <= 1)) fail("min_vote_fraction", min_vote_fraction, "in (0, 1]");
+  if (max_search_radius < search_radius || max_search_radius > 200)
+    fail("max_search_radius", max_search_radius, "in [search_radius, 200]");
+  if (global_search_radius < 0 || global_search_radius > 200)
+    fail("global_search_radius", global_search_radius, "in [0, 200]");
+  if (!(global_truncation >= 1 && global_truncation <= 100))
+    fail("global_truncation", global_truncation, "in [1, 100]");
+  if (orientation_bins < 1 || orientation_bins > 64)
+    fail("orientation_bins", orientation_bins, "in [1, 64]");
+  if (!(min_vote_fraction > 0 && min_vote_fraction <= 1))
+    fail("min_vote_fraction", min_vote_fraction, "in (0, 1]");
   if (!(ransac_threshold > 0)) fail("ransac_threshold", ransac_threshold, "> 0");
   if (ransac_iterations < 1) fail("ransac_iterations", ransac_iterations, ">= 1");
 }
 
 int MatchResult::num_inliers() const {
-  return static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const FeatureMatch& m) { return m.inlier; }));
+  return static_cast<int>(std::count_if(matches.begin(), matches.end(),
+                                        [](const FeatureMatch& m) { return m.inlier; }));
 }
 
 namespace {
 
 cv::Mat Grey(const Image8& im) {
-  const cv::Mat m(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3, const_cast<std::uint8_t*>(im.data.data()));
+  const cv::Mat m(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3,
+                  const_cast<std::uint8_t*>(im.data.data()));
   if (im.channels == 1) return m.clone();
   cv::Mat g;
   cv::cvtColor(m, g, cv::COLOR_RGB2GRAY);
@@ -48,7 +58,8 @@ cv::Mat Grey(const Image8& im) {
 
 Image8 ToImage(const cv::Mat& grey) {
   Image8 out(grey.cols, grey.rows, 1);
-  for (int y = 0; y < grey.rows; ++y) std::copy_n(grey.ptr<std::uint8_t>(y), grey.cols, out.pixel(0, y));
+  for (int y = 0; y < grey.rows; ++y)
+    std::copy_n(grey.ptr<std::uint8_t>(y), grey.cols, out.pixel(0, y));
   return out;
 }
 
@@ -79,7 +90,8 @@ EdgeData Edges(const Image8& im, const FeatureParams& p) {
       if (!edge[x]) continue;
       double a = std::atan2(gy.at<float>(y, x), gx.at<float>(y, x));
       if (a < 0) a += M_PI;  // mod π: edges have no sign (light/dark may differ between images)
-      e.orientation.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(std::min(p.orientation_bins - 1, static_cast<int>(a / M_PI * p.orientation_bins)));
+      e.orientation.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(
+          std::min(p.orientation_bins - 1, static_cast<int>(a / M_PI * p.orientation_bins)));
     }
   }
   return e;
@@ -87,7 +99,8 @@ EdgeData Edges(const Image8& im, const FeatureParams& p) {
 
 // Harris corners of an edge image: local maxima above a share of the maximum, strongest first,
 // at least min_distance apart. `keep` filters candidates (virtual: on the object).
-std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p, const std::vector<std::uint8_t>* mask,
+std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p,
+                                const std::vector<std::uint8_t>* mask,
                                 std::vector<Vec2>* rejected) {
   cv::Mat f, response;
   edges.convertTo(f, CV_32F, 1.0 / 255.0);
@@ -105,17 +118,21 @@ std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p, co
   for (int y = 0; y < response.rows; ++y)
     for (int x = 0; x < response.cols; ++x) {
       const float r = response.at<float>(y, x);
-      if (r >= p.harris_relative * max_r && r >= dilated.at<float>(y, x)) cands.push_back({r, x, y});
+      if (r >= p.harris_relative * max_r && r >= dilated.at<float>(y, x))
+        cands.push_back({r, x, y});
     }
-  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.r > b.r; });
+  std::stable_sort(cands.begin(), cands.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.r > b.r; });
   std::vector<Vec2> out;
   for (const Candidate& c : cands) {
     const Vec2 pt(c.x, c.y);
     const bool on_object = mask == nullptr || (*mask)[std::size_t(c.y) * edges.cols + c.x] != 0;
     bool far = true;
     for (const Vec2& q : out) far = far && (q - pt).norm() >= p.min_corner_distance;
-    if (on_object && far && static_cast<int>(out.size()) < p.max_corners) out.push_back(pt);
-    else if (rejected) rejected->push_back(pt);
+    if (on_object && far && static_cast<int>(out.size()) < p.max_corners)
+      out.push_back(pt);
+    else if (rejected)
+      rejected->push_back(pt);
   }
   return out;
 }
@@ -129,9 +146,11 @@ struct GlobalResult {
   double cost_unshifted = std::numeric_limits<double>::quiet_NaN();
 };
 
-GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve, const std::vector<std::uint8_t>* mask, const FeatureParams& p) {
+GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve,
+                         const std::vector<std::uint8_t>* mask, const FeatureParams& p) {
   constexpr std::size_t kMaxPixels = 1500;  // enough for a silhouette; bounds the search's cost
-  const int W = re.edges.cols, H = re.edges.rows, B = p.orientation_bins, G = p.global_search_radius;
+  const int W = re.edges.cols, H = re.edges.rows, B = p.orientation_bins,
+            G = p.global_search_radius;
   const float tau = static_cast<float>(p.global_truncation);
   struct Pixel {
     int x, y, bin;
@@ -158,7 +177,9 @@ GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve, const std::vect
     x0 = std::min(x0, q.x), x1 = std::max(x1, q.x), y0 = std::min(y0, q.y), y1 = std::max(y1, q.y);
   }
   const int margin = G + static_cast<int>(std::ceil(tau)) + 1;
-  const cv::Rect roi = cv::Rect(x0 - margin, y0 - margin, x1 - x0 + 2 * margin + 1, y1 - y0 + 2 * margin + 1) & cv::Rect(0, 0, W, H);
+  const cv::Rect roi =
+      cv::Rect(x0 - margin, y0 - margin, x1 - x0 + 2 * margin + 1, y1 - y0 + 2 * margin + 1) &
+      cv::Rect(0, 0, W, H);
   std::vector<cv::Mat> dt(static_cast<std::size_t>(B));
   cv::Mat free(roi.height, roi.width, CV_8U);
   for (int b = 0; b < B; ++b) {
@@ -169,14 +190,17 @@ GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve, const std::vect
       std::uint8_t* f = free.ptr<std::uint8_t>(y);
       for (int x = 0; x < roi.width; ++x) f[x] = e[x] && BinsAgree(o[x], b, B) ? 0 : 255;
     }
-    cv::distanceTransform(free, dt[static_cast<std::size_t>(b)], cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    cv::distanceTransform(free, dt[static_cast<std::size_t>(b)], cv::DIST_L2,
+                          cv::DIST_MASK_PRECISE);
     cv::min(dt[static_cast<std::size_t>(b)], tau, dt[static_cast<std::size_t>(b)]);
   }
   const auto cost = [&](int sx, int sy) {
     double sum = 0.0;
     for (const Pixel& q : px) {
       const int x = q.x + sx, y = q.y + sy;
-      sum += (x < 0 || y < 0 || x >= W || y >= H) ? tau : dt[static_cast<std::size_t>(q.bin)].at<float>(y - roi.y, x - roi.x);
+      sum += (x < 0 || y < 0 || x >= W || y >= H)
+                 ? tau
+                 : dt[static_cast<std::size_t>(q.bin)].at<float>(y - roi.y, x - roi.x);
     }
     return sum / static_cast<double>(px.size());
   };
@@ -186,7 +210,8 @@ GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve, const std::vect
   const auto consider = [&](int sx, int sy) {
     if (sx < -G || sx > G || sy < -G || sy > G) return;
     const double c = cost(sx, sy);
-    if (c < best || (c == best && sx * sx + sy * sy < bx * bx + by * by)) best = c, bx = sx, by = sy;
+    if (c < best || (c == best && sx * sx + sy * sy < bx * bx + by * by))
+      best = c, bx = sx, by = sy;
   };
   for (int sy = -(G / 3) * 3; sy <= G; sy += 3)
     for (int sx = -(G / 3) * 3; sx <= G; sx += 3) consider(sx, sy);
@@ -207,10 +232,12 @@ std::vector<Vec2> EdgeCorners(const Image8& edges, const FeatureParams& p) {
   return HarrisCorners(m, p, nullptr, nullptr);
 }
 
-MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const std::vector<std::uint8_t>* object_mask,
-                          const FeatureParams& p, const std::vector<std::uint8_t>* occluder_mask, bool camera_corners) {
+MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
+                          const std::vector<std::uint8_t>* object_mask, const FeatureParams& p,
+                          const std::vector<std::uint8_t>* occluder_mask, bool camera_corners) {
   p.Validate();
-  INHAND_CHECK(real.width == virtual_image.width && real.height == virtual_image.height, "images of different sizes");
+  INHAND_CHECK(real.width == virtual_image.width && real.height == virtual_image.height,
+               "images of different sizes");
   MatchResult result;
   MatchDebug& dbg = result.debug;
   // 1. Canny.
@@ -221,11 +248,15 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
   // Less the neighbourhood of occluders, whose junctions with the object are not its features.
   std::vector<std::uint8_t> grown;
   if (object_mask) {
-    cv::Mat m(virtual_image.height, virtual_image.width, CV_8U, const_cast<std::uint8_t*>(object_mask->data())), g;
+    cv::Mat m(virtual_image.height, virtual_image.width, CV_8U,
+              const_cast<std::uint8_t*>(object_mask->data())),
+        g;
     cv::dilate(m, g, cv::Mat::ones(5, 5, CV_8U));
     if (occluder_mask && p.occluder_clearance > 0) {
       INHAND_CHECK(occluder_mask->size() == g.total(), "occluder mask of another size");
-      cv::Mat o(virtual_image.height, virtual_image.width, CV_8U, const_cast<std::uint8_t*>(occluder_mask->data())), near;
+      cv::Mat o(virtual_image.height, virtual_image.width, CV_8U,
+                const_cast<std::uint8_t*>(occluder_mask->data())),
+          near;
       const int k = 2 * p.occluder_clearance + 1;
       cv::dilate(o, near, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
       g.setTo(0, near);
@@ -243,7 +274,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
   }
   // 2. Harris on the edge images.
   if (camera_corners) dbg.real_corners = HarrisCorners(re.edges, p, nullptr, nullptr);
-  dbg.virtual_corners = HarrisCorners(ve.edges, p, object_mask ? &grown : nullptr, &dbg.virtual_corners_rejected);
+  dbg.virtual_corners =
+      HarrisCorners(ve.edges, p, object_mask ? &grown : nullptr, &dbg.virtual_corners_rejected);
   const int W = real.width, H = real.height, R = p.piece_radius, S = p.search_radius;
   // 3. Contour pieces: virtual edge pixels around each corner (offsets and orientation bins).
   struct PieceEdge {
@@ -252,7 +284,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
   std::vector<std::vector<PieceEdge>> pieces(dbg.virtual_corners.size());
   dbg.pieces.resize(dbg.virtual_corners.size());
   for (std::size_t i = 0; i < dbg.virtual_corners.size(); ++i) {
-    const int cx = static_cast<int>(dbg.virtual_corners[i].x()), cy = static_cast<int>(dbg.virtual_corners[i].y());
+    const int cx = static_cast<int>(dbg.virtual_corners[i].x()),
+              cy = static_cast<int>(dbg.virtual_corners[i].y());
     for (int dy = -R; dy <= R; ++dy)
       for (int dx = -R; dx <= R; ++dx) {
         const int x = cx + dx, y = cy + dy;
@@ -274,7 +307,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
       continue;
     }
     // The search window is centred at the corner moved by step 0's shift.
-    const int cx = static_cast<int>(dbg.virtual_corners[i].x()) + ox, cy = static_cast<int>(dbg.virtual_corners[i].y()) + oy;
+    const int cx = static_cast<int>(dbg.virtual_corners[i].x()) + ox,
+              cy = static_cast<int>(dbg.virtual_corners[i].y()) + oy;
     std::fill(acc.begin(), acc.end(), 0);
     // The real edge pixels any piece pixel can reach (within R + S of the corner), listed once
     // per corner by orientation bin: each vote pairs one of them with a piece pixel of an
@@ -300,7 +334,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     for (int sy = -S; sy <= S; ++sy)
       for (int sx = -S; sx <= S; ++sx) {
         const int v = acc[static_cast<std::size_t>((sy + S) * A + (sx + S))];
-        if (v > best || (v == best && sx * sx + sy * sy < bx * bx + by * by)) best = v, bx = sx, by = sy;
+        if (v > best || (v == best && sx * sx + sy * sy < bx * bx + by * by))
+          best = v, bx = sx, by = sy;
       }
     double wsum = 0, mx = 0, my = 0;
     for (int dy = -1; dy <= 1; ++dy)
@@ -312,7 +347,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
       }
     Image8 votes(A, A, 1);
     for (int k = 0; k < A * A; ++k)
-      votes.data[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(best > 0 ? 255 * acc[static_cast<std::size_t>(k)] / best : 0);
+      votes.data[static_cast<std::size_t>(k)] =
+          static_cast<std::uint8_t>(best > 0 ? 255 * acc[static_cast<std::size_t>(k)] / best : 0);
     dbg.votes[i] = votes;
     const double fraction = double(best) / double(pieces[i].size());
     if (fraction < p.min_vote_fraction) {
@@ -353,7 +389,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     std::vector<std::size_t> best_set;
     for (int it = 0; it < p.ransac_iterations; ++it) {
       const std::size_t a = pick(rng), b = pick(rng);
-      if (a == b || (result.matches[a].virtual_px - result.matches[b].virtual_px).norm() < 5.0) continue;
+      if (a == b || (result.matches[a].virtual_px - result.matches[b].virtual_px).norm() < 5.0)
+        continue;
       const auto T = fit({a, b});
       std::vector<std::size_t> set;
       for (std::size_t k = 0; k < n; ++k)
@@ -362,7 +399,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image, const
     }
     if (best_set.size() >= 2) {
       dbg.similarity = fit(best_set);
-      for (std::size_t k = 0; k < n; ++k) result.matches[k].inlier = residual(dbg.similarity, result.matches[k]) < p.ransac_threshold;
+      for (std::size_t k = 0; k < n; ++k)
+        result.matches[k].inlier = residual(dbg.similarity, result.matches[k]) < p.ransac_threshold;
     }
   } else if (n == 1) {
     result.matches[0].inlier = false;  // one match cannot be checked against anything

@@ -23,16 +23,22 @@
 namespace inhand {
 
 void TagDetectorParams::Validate() const {
-  const auto fail = [](const std::string& field, const std::string& value, const std::string& expected) {
-    throw InputError("tag detector parameter '" + field + "' is " + value + ", expected " + expected);
+  const auto fail = [](const std::string& field, const std::string& value,
+                       const std::string& expected) {
+    throw InputError("tag detector parameter '" + field + "' is " + value + ", expected " +
+                     expected);
   };
-  if (family != "tag36h11" && family != "tag25h9" && family != "tag16h5" && family != "tagStandard41h12" &&
-      family != "tagCircle21h7")
-    fail("family", "'" + family + "'", "tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
-  if (!(decimate >= 1.0 && decimate <= 8.0)) fail("decimate", std::to_string(decimate), "a number in [1, 8]");
+  if (family != "tag36h11" && family != "tag25h9" && family != "tag16h5" &&
+      family != "tagStandard41h12" && family != "tagCircle21h7")
+    fail("family", "'" + family + "'",
+         "tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
+  if (!(decimate >= 1.0 && decimate <= 8.0))
+    fail("decimate", std::to_string(decimate), "a number in [1, 8]");
   if (!(sigma >= 0.0 && sigma <= 10.0)) fail("sigma", std::to_string(sigma), "a number in [0, 10]");
-  if (threads < 1 || threads > 64) fail("threads", std::to_string(threads), "an integer in [1, 64]");
-  if (max_hamming < 0 || max_hamming > 3) fail("max_hamming", std::to_string(max_hamming), "an integer in [0, 3]");
+  if (threads < 1 || threads > 64)
+    fail("threads", std::to_string(threads), "an integer in [1, 64]");
+  if (max_hamming < 0 || max_hamming > 3)
+    fail("max_hamming", std::to_string(max_hamming), "an integer in [0, 3]");
 }
 
 namespace {
@@ -48,7 +54,9 @@ Family CreateFamily(const std::string& f) {
   if (f == "tag16h5") return {tag16h5_create(), tag16h5_destroy};
   if (f == "tagStandard41h12") return {tagStandard41h12_create(), tagStandard41h12_destroy};
   if (f == "tagCircle21h7") return {tagCircle21h7_create(), tagCircle21h7_destroy};
-  throw InputError("tag family '" + f + "' is unknown, expected tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
+  throw InputError(
+      "tag family '" + f +
+      "' is unknown, expected tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
 }
 
 }  // namespace
@@ -76,7 +84,8 @@ TriangleMesh MakeTagMesh(const TagPlacement& tag) {
   cv::imencode(".png", big, png);
   const double half = 0.5 * tag.size * w / border_modules;
   TriangleMesh m;
-  m.vertices = {Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0), Vec3(-half, half, 0)};
+  m.vertices = {Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0),
+                Vec3(-half, half, 0)};
   m.normals.assign(4, Vec3::UnitZ());
   m.uvs = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
   m.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
@@ -98,7 +107,8 @@ std::vector<TriangleMesh> PrintedTagMeshes(const ObjectModel& object) {
 Image8 ReadGreyImage(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".jpg" || ext == ".jpeg") {
     int error = 0;
     // The decoder prints notes on unknown markers to stdout: keep stdout clean for JSON.
@@ -111,10 +121,13 @@ Image8 ReadGreyImage(const std::string& path) {
     if (saved >= 0 && null_fd >= 0) ::dup2(saved, STDOUT_FILENO);
     if (saved >= 0) ::close(saved);
     if (null_fd >= 0) ::close(null_fd);
-    if (jpeg == nullptr) throw InputError(path + ": not a readable JPEG (libapriltag's decoder, error " + std::to_string(error) + ")");
+    if (jpeg == nullptr)
+      throw InputError(path + ": not a readable JPEG (libapriltag's decoder, error " +
+                       std::to_string(error) + ")");
     image_u8_t* im = pjpeg_to_u8_baseline(jpeg);
     Image8 out(im->width, im->height, 1);
-    for (int y = 0; y < im->height; ++y) std::copy_n(im->buf + y * im->stride, im->width, out.pixel(0, y));
+    for (int y = 0; y < im->height; ++y)
+      std::copy_n(im->buf + y * im->stride, im->width, out.pixel(0, y));
     image_u8_destroy(im);
     pjpeg_destroy(jpeg);
     return out;
@@ -122,7 +135,8 @@ Image8 ReadGreyImage(const std::string& path) {
   const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
   if (grey.empty()) throw InputError(path + ": not a readable image");
   Image8 out(grey.cols, grey.rows, 1);
-  for (int y = 0; y < grey.rows; ++y) std::copy_n(grey.ptr<std::uint8_t>(y), grey.cols, out.pixel(0, y));
+  for (int y = 0; y < grey.rows; ++y)
+    std::copy_n(grey.ptr<std::uint8_t>(y), grey.cols, out.pixel(0, y));
   return out;
 }
 
@@ -133,7 +147,8 @@ struct TagDetector::Impl {
   std::vector<std::uint8_t> grey;
 };
 
-TagDetector::TagDetector(const TagDetectorParams& params) : impl_(std::make_unique<Impl>()), params_(params) {
+TagDetector::TagDetector(const TagDetectorParams& params)
+    : impl_(std::make_unique<Impl>()), params_(params) {
   params_.Validate();
   Impl& d = *impl_;
   const Family fam = CreateFamily(params_.family);
@@ -158,9 +173,10 @@ std::vector<TagDetection> TagDetector::Detect(const Image8& image) {
 
 std::vector<TagDetection> TagDetector::Detect(const Image8& image, const PixelRect& region) {
   Impl& d = *impl_;
-  INHAND_CHECK(image.channels == 1 || image.channels == 3, "tag detection needs a grey or RGB image");
-  const PixelRect r{std::max(region.x0, 0), std::max(region.y0, 0), std::min(region.x1, image.width),
-                    std::min(region.y1, image.height)};
+  INHAND_CHECK(image.channels == 1 || image.channels == 3,
+               "tag detection needs a grey or RGB image");
+  const PixelRect r{std::max(region.x0, 0), std::max(region.y0, 0),
+                    std::min(region.x1, image.width), std::min(region.y1, image.height)};
   if (r.empty()) return {};
   const int w = r.x1 - r.x0, h = r.y1 - r.y0;
   // libapriltag's quad detection reads out of bounds (SIGSEGV) on images whose decimated height
@@ -176,7 +192,8 @@ std::vector<TagDetection> TagDetector::Detect(const Image8& image, const PixelRe
       std::copy_n(row, w, out);
     } else {
       for (int x = 0; x < w; ++x, row += 3)
-        out[x] = static_cast<std::uint8_t>((299 * row[0] + 587 * row[1] + 114 * row[2] + 500) / 1000);
+        out[x] =
+            static_cast<std::uint8_t>((299 * row[0] + 587 * row[1] + 114 * row[2] + 500) / 1000);
     }
   }
   image_u8_t im{w, h, w, d.grey.data()};
@@ -193,13 +210,16 @@ std::vector<TagDetection> TagDetector::Detect(const Image8& image, const PixelRe
     t.decision_margin = det->decision_margin;
     // libapriltag's coordinates put pixel centres at +0.5; the estimator's at integers.
     const Vec2 offset(r.x0 - 0.5, r.y0 - 0.5);
-    for (int k = 0; k < 4; ++k) t.corners[static_cast<std::size_t>(k)] = Vec2(det->p[k][0], det->p[k][1]) + offset;
+    for (int k = 0; k < 4; ++k)
+      t.corners[static_cast<std::size_t>(k)] = Vec2(det->p[k][0], det->p[k][1]) + offset;
     t.center = Vec2(det->c[0], det->c[1]) + offset;
     out.push_back(t);
   }
   apriltag_detections_destroy(found);
   std::sort(out.begin(), out.end(), [](const TagDetection& a, const TagDetection& b) {
-    return a.id != b.id ? a.id < b.id : (a.center.x() != b.center.x() ? a.center.x() < b.center.x() : a.center.y() < b.center.y());
+    return a.id != b.id ? a.id < b.id
+                        : (a.center.x() != b.center.x() ? a.center.x() < b.center.x()
+                                                        : a.center.y() < b.center.y());
   });
   return out;
 }

@@ -51,11 +51,15 @@ constexpr double kMaxPixels = 1 << 28;  // 268 megapixels
 void CheckPngHeader(const unsigned char* head, std::size_t n, const std::string& what) {
   static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (n < 24 || !std::equal(kPng, kPng + 8, head)) return;
-  const auto be32 = [&](int at) { return (double(head[at]) * 256 + head[at + 1]) * 65536 + double(head[at + 2]) * 256 + head[at + 3]; };
+  const auto be32 = [&](int at) {
+    return (double(head[at]) * 256 + head[at + 1]) * 65536 + double(head[at + 2]) * 256 +
+           head[at + 3];
+  };
   const double w = be32(16), h = be32(20);
   if (w < 1 || h < 1 || w * h > kMaxPixels)
-    throw InputError(what + ": the PNG header says " + std::to_string(static_cast<long long>(w)) + "x" +
-                     std::to_string(static_cast<long long>(h)) + " px; expected 1 to 268 million pixels");
+    throw InputError(what + ": the PNG header says " + std::to_string(static_cast<long long>(w)) +
+                     "x" + std::to_string(static_cast<long long>(h)) +
+                     " px; expected 1 to 268 million pixels");
 }
 
 // An OpenCV decode (BGR) as an RGB Image8, its failures as InputError naming `what`.
@@ -67,7 +71,8 @@ Image8 DecodedRgb(const std::string& what, Decode decode) {
   } catch (const cv::Exception& e) {
     throw InputError(what + ": not a readable image (" + e.err + ")");
   }
-  if (bgr.empty()) throw InputError(what + ": not a readable image (unknown format, truncated or corrupt)");
+  if (bgr.empty())
+    throw InputError(what + ": not a readable image (unknown format, truncated or corrupt)");
   Image8 out(bgr.cols, bgr.rows, 3);
   cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
   cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
@@ -91,9 +96,12 @@ void WriteImage(const std::string& path, const Image8& image) {
   const int type = image.channels == 1 ? CV_8UC1 : image.channels == 3 ? CV_8UC3 : CV_8UC4;
   const cv::Mat in(image.height, image.width, type, const_cast<std::uint8_t*>(image.data.data()));
   cv::Mat bgr;
-  if (image.channels == 3) cv::cvtColor(in, bgr, cv::COLOR_RGB2BGR);
-  else if (image.channels == 4) cv::cvtColor(in, bgr, cv::COLOR_RGBA2BGRA);
-  else bgr = in;
+  if (image.channels == 3)
+    cv::cvtColor(in, bgr, cv::COLOR_RGB2BGR);
+  else if (image.channels == 4)
+    cv::cvtColor(in, bgr, cv::COLOR_RGBA2BGRA);
+  else
+    bgr = in;
   bool ok = false;
   try {
     ok = cv::imwrite(path, bgr);
@@ -105,7 +113,11 @@ void WriteImage(const std::string& path, const Image8& image) {
 
 Image8 DecodeImage(const std::uint8_t* data, std::size_t size, const std::string& context) {
   CheckPngHeader(data, size, context);
-  return DecodedRgb(context, [&] { return cv::imdecode(cv::Mat(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data)), cv::IMREAD_COLOR); });
+  return DecodedRgb(context, [&] {
+    return cv::imdecode(
+        cv::Mat(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data)),
+        cv::IMREAD_COLOR);
+  });
 }
 
 }  // namespace inhand

@@ -33,7 +33,8 @@ void Line(cv::Mat& img, const Vec2& a, const Vec2& b, const cv::Scalar& c, int t
   cv::line(img, Fx(a), Fx(b), c, thickness, cv::LINE_AA, kShift);
 }
 
-void DrawDashedContours(cv::Mat& img, const std::vector<std::vector<cv::Point>>& contours, const cv::Scalar& c) {
+void DrawDashedContours(cv::Mat& img, const std::vector<std::vector<cv::Point>>& contours,
+                        const cv::Scalar& c) {
   constexpr int kOn = 7, kPeriod = 12;
   for (const auto& contour : contours) {
     for (std::size_t i = 0; i < contour.size(); ++i)
@@ -50,7 +51,8 @@ void DrawDashedContours(cv::Mat& img, const std::vector<std::vector<cv::Point>>&
 OverlayPainter::OverlayPainter(Renderer& renderer, std::vector<int> object_meshes)
     : renderer_(renderer), object_meshes_(std::move(object_meshes)) {}
 
-std::vector<std::uint8_t> OverlayPainter::Silhouette(const Transform& T_PO, const Transform& T_PC, const Intrinsics& K) {
+std::vector<std::uint8_t> OverlayPainter::Silhouette(const Transform& T_PO, const Transform& T_PC,
+                                                     const Intrinsics& K) {
   Scene scene;
   scene.K = K;
   scene.T_PC = T_PC;
@@ -66,7 +68,8 @@ std::vector<std::uint8_t> OverlayPainter::Silhouette(const Transform& T_PO, cons
 
 Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& layers) {
   const Intrinsics& K = frame.K;
-  INHAND_CHECK(frame.camera.width == K.width && frame.camera.height == K.height && frame.camera.channels == 3,
+  INHAND_CHECK(frame.camera.width == K.width && frame.camera.height == K.height &&
+                   frame.camera.channels == 3,
                "overlay background must be RGB of the intrinsics' size");
   Image8 out = frame.camera;
   cv::Mat img(out.height, out.width, CV_8UC3, out.data.data());
@@ -83,17 +86,22 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     if (box.empty()) return;
     if (layers.silhouette && !e.dashed) {
       cv::Mat roi = img(box), blended;
-      cv::addWeighted(roi, 0.72, cv::Mat(box.size(), CV_8UC3, Colour(e.colour)), 0.28, 0.0, blended);
+      cv::addWeighted(roi, 0.72, cv::Mat(box.size(), CV_8UC3, Colour(e.colour)), 0.28, 0.0,
+                      blended);
       blended.copyTo(roi, mask(box));
     }
     if (layers.outline) {
       std::vector<std::vector<cv::Point>> contours;
-      cv::findContours(mask(box).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, box.tl());
-      if (e.dashed) DrawDashedContours(img, contours, Colour(e.colour));
-      else cv::drawContours(img, contours, -1, Colour(e.colour), 2, cv::LINE_AA);
+      cv::findContours(mask(box).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE,
+                       box.tl());
+      if (e.dashed)
+        DrawDashedContours(img, contours, Colour(e.colour));
+      else
+        cv::drawContours(img, contours, -1, Colour(e.colour), 2, cv::LINE_AA);
     }
   };
-  for (std::size_t e0 = 0; e0 < frame.estimates.size() && (layers.silhouette || layers.outline); e0 += 16) {
+  for (std::size_t e0 = 0; e0 < frame.estimates.size() && (layers.silhouette || layers.outline);
+       e0 += 16) {
     Scene scene;
     scene.K = K;
     scene.T_PC = frame.T_PC;
@@ -101,10 +109,12 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     for (std::size_t i = e0; i < e1; ++i) {
       const std::size_t first = scene.items.size();
       AddObject(scene, object_meshes_, frame.estimates[i].T_PO, ObjectStyle());
-      for (std::size_t k = first; k < scene.items.size(); ++k) scene.items[k].label = static_cast<std::uint16_t>(1u << (i - e0));
+      for (std::size_t k = first; k < scene.items.size(); ++k)
+        scene.items[k].label = static_cast<std::uint16_t>(1u << (i - e0));
     }
     renderer_.RenderMasks(scene, masks_);
-    for (std::size_t i = e0; i < e1; ++i) silhouette(frame.estimates[i], static_cast<std::uint16_t>(1u << (i - e0)));
+    for (std::size_t i = e0; i < e1; ++i)
+      silhouette(frame.estimates[i], static_cast<std::uint16_t>(1u << (i - e0)));
   }
 
   for (const OverlayEstimate& e : frame.estimates) {
@@ -144,7 +154,8 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
           const double a = frame.friction_cone_deg * M_PI / 180.0, L = 0.02;
           for (double s : {-1.0, 1.0}) {
             Vec2 q;
-            if (ProjectP(T_CP, K, c.c_o_P + L * (std::cos(a) * c.normal_P + s * std::sin(a) * side), q))
+            if (ProjectP(T_CP, K, c.c_o_P + L * (std::cos(a) * c.normal_P + s * std::sin(a) * side),
+                         q))
               Line(img, p, q, colour, 1);
           }
         }
@@ -193,9 +204,11 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     for (const std::string& line : lines) {
       int base = 0;
       const cv::Size sz = cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, kHudScale, 1, &base);
-      cv::Mat roi = img(cv::Rect(4, y, std::min(sz.width + 8, img.cols - 4), std::min(sz.height + base + 6, img.rows - y)));
+      cv::Mat roi = img(cv::Rect(4, y, std::min(sz.width + 8, img.cols - 4),
+                                 std::min(sz.height + base + 6, img.rows - y)));
       roi = roi * 0.35;
-      cv::putText(img, line, cv::Point(8, y + sz.height + 3), cv::FONT_HERSHEY_SIMPLEX, kHudScale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+      cv::putText(img, line, cv::Point(8, y + sz.height + 3), cv::FONT_HERSHEY_SIMPLEX, kHudScale,
+                  cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
       y += sz.height + base + 8;
       if (y > img.rows - 20) break;
     }
@@ -207,17 +220,22 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     for (const OverlayEstimate& e : frame.estimates) {
       int base = 0;
       const cv::Size sz = cv::getTextSize(e.name, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &base);
-      cv::rectangle(img, cv::Rect(x - 3, y - sz.height - 5, sz.width + 26, sz.height + 10), cv::Scalar(255, 255, 255), cv::FILLED);
-      if (e.dashed) cv::line(img, cv::Point(x, y - 4), cv::Point(x + 14, y - 4), Colour(e.colour), 2);
-      else cv::rectangle(img, cv::Rect(x, y - 10, 14, 10), Colour(e.colour), cv::FILLED);
-      cv::putText(img, e.name, cv::Point(x + 18, y), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+      cv::rectangle(img, cv::Rect(x - 3, y - sz.height - 5, sz.width + 26, sz.height + 10),
+                    cv::Scalar(255, 255, 255), cv::FILLED);
+      if (e.dashed)
+        cv::line(img, cv::Point(x, y - 4), cv::Point(x + 14, y - 4), Colour(e.colour), 2);
+      else
+        cv::rectangle(img, cv::Rect(x, y - 10, 14, 10), Colour(e.colour), cv::FILLED);
+      cv::putText(img, e.name, cv::Point(x + 18, y), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                  cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
       x += sz.width + 34;
     }
   }
   return out;
 }
 
-Image8 SideBySide(const std::vector<const Image8*>& images, const std::vector<std::string>& captions) {
+Image8 SideBySide(const std::vector<const Image8*>& images,
+                  const std::vector<std::string>& captions) {
   INHAND_CHECK(!images.empty(), "SideBySide needs images");
   const int H = images[0]->height;
   std::vector<cv::Mat> tiles;
@@ -225,19 +243,26 @@ Image8 SideBySide(const std::vector<const Image8*>& images, const std::vector<st
     const Image8& im = *images[i];
     const cv::Mat m(im.height, im.width, CV_8UC3, const_cast<std::uint8_t*>(im.data.data()));
     cv::Mat scaled;
-    if (im.height != H) cv::resize(m, scaled, cv::Size(static_cast<int>(std::lround(im.width * double(H) / im.height)), H), 0, 0, cv::INTER_AREA);
-    else scaled = m.clone();
+    if (im.height != H)
+      cv::resize(m, scaled,
+                 cv::Size(static_cast<int>(std::lround(im.width * double(H) / im.height)), H), 0, 0,
+                 cv::INTER_AREA);
+    else
+      scaled = m.clone();
     if (i < captions.size() && !captions[i].empty()) {
       cv::rectangle(scaled, cv::Rect(0, 0, scaled.cols, 20), cv::Scalar(30, 30, 30), cv::FILLED);
-      cv::putText(scaled, captions[i], cv::Point(6, 14), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+      cv::putText(scaled, captions[i], cv::Point(6, 14), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                  cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     }
     tiles.push_back(scaled);
   }
   cv::Mat all;
   cv::hconcat(tiles, all);
   // Even sizes for H.264.
-  if (all.cols % 2) cv::copyMakeBorder(all, all, 0, 0, 0, 1, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
-  if (all.rows % 2) cv::copyMakeBorder(all, all, 0, 1, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+  if (all.cols % 2)
+    cv::copyMakeBorder(all, all, 0, 0, 0, 1, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+  if (all.rows % 2)
+    cv::copyMakeBorder(all, all, 0, 1, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
   Image8 out(all.cols, all.rows, 3);
   std::memcpy(out.data.data(), all.data, out.data.size());
   return out;

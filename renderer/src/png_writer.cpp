@@ -37,7 +37,9 @@ std::vector<int> HuffmanLengths(std::vector<std::uint64_t> freq, int max_bits) {
     using Item = std::pair<std::uint64_t, int>;
     std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
     for (int s = 0; s < n; ++s)
-      if (freq[static_cast<std::size_t>(s)] > 0) nodes.push_back({freq[static_cast<std::size_t>(s)], -1, s}), q.push({nodes.back().f, static_cast<int>(nodes.size()) - 1});
+      if (freq[static_cast<std::size_t>(s)] > 0)
+        nodes.push_back({freq[static_cast<std::size_t>(s)], -1, s}),
+            q.push({nodes.back().f, static_cast<int>(nodes.size()) - 1});
     while (q.size() > 1) {
       const Item a = q.top();
       q.pop();
@@ -64,7 +66,8 @@ std::vector<int> HuffmanLengths(std::vector<std::uint64_t> freq, int max_bits) {
     }
     if (deepest <= max_bits) return lengths;
     for (auto& f : freq)
-      if (f > 0) f = (f + 1) / 2;  // flatten and try again (converges: equal counts give a balanced tree)
+      if (f > 0)
+        f = (f + 1) / 2;  // flatten and try again (converges: equal counts give a balanced tree)
   }
 }
 
@@ -100,8 +103,9 @@ class BitWriter {
     acc_ |= static_cast<std::uint64_t>(bits) << fill_;
     fill_ += n;
     const auto word = static_cast<std::uint32_t>(acc_);
-    const std::uint8_t b[4] = {static_cast<std::uint8_t>(word), static_cast<std::uint8_t>(word >> 8), static_cast<std::uint8_t>(word >> 16),
-                               static_cast<std::uint8_t>(word >> 24)};
+    const std::uint8_t b[4] = {
+        static_cast<std::uint8_t>(word), static_cast<std::uint8_t>(word >> 8),
+        static_cast<std::uint8_t>(word >> 16), static_cast<std::uint8_t>(word >> 24)};
     std::memcpy(out_, b, 4);
     const int full = fill_ >> 5;  // 0 or 1
     out_ += 4 * full;
@@ -128,7 +132,8 @@ void PutBe32(std::vector<std::uint8_t>* out, std::uint32_t v) {
   for (int s = 24; s >= 0; s -= 8) out->push_back(static_cast<std::uint8_t>(v >> s));
 }
 
-void Chunk(std::vector<std::uint8_t>* png, const char type[4], const std::uint8_t* data, std::size_t size) {
+void Chunk(std::vector<std::uint8_t>* png, const char type[4], const std::uint8_t* data,
+           std::size_t size) {
   PutBe32(png, static_cast<std::uint32_t>(size));
   const std::size_t at = png->size();
   png->insert(png->end(), type, type + 4);
@@ -140,11 +145,13 @@ void Chunk(std::vector<std::uint8_t>* png, const char type[4], const std::uint8_
 
 std::vector<std::uint8_t> EncodePng(const Image8& image) {
   INHAND_CHECK(image.channels == 1 || image.channels == 3, "EncodePng takes RGB or grey images");
-  return EncodePng(image.data.data(), image.width, image.height, image.channels,
-                   static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels));
+  return EncodePng(
+      image.data.data(), image.width, image.height, image.channels,
+      static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels));
 }
 
-std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int height, int channels, std::size_t stride) {
+std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int height, int channels,
+                                    std::size_t stride) {
   INHAND_CHECK(channels == 1 || channels == 3, "EncodePng takes RGB or grey images");
   INHAND_CHECK(width > 0 && height > 0, "EncodePng of an empty image");
   const std::size_t c = static_cast<std::size_t>(channels);
@@ -177,9 +184,11 @@ std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int h
     }
   }
   std::array<std::uint64_t, 286> counts{};
-  for (std::size_t b = 0; b < 256; ++b) counts[b] = std::uint64_t{hist[0][b]} + hist[1][b] + hist[2][b] + hist[3][b];
+  for (std::size_t b = 0; b < 256; ++b)
+    counts[b] = std::uint64_t{hist[0][b]} + hist[1][b] + hist[2][b] + hist[3][b];
   counts[256] = 1;  // end of block
-  const std::vector<int> lit_len = HuffmanLengths(std::vector<std::uint64_t>(counts.begin(), counts.end()), 15);
+  const std::vector<int> lit_len =
+      HuffmanLengths(std::vector<std::uint64_t>(counts.begin(), counts.end()), 15);
   const std::vector<std::uint32_t> lit_code = CanonicalCodes(lit_len);
 
   // The code lengths of the 257 literal/length codes and one (unused, zero-length) distance
@@ -190,7 +199,8 @@ std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int h
   for (int l : all) ++cl_freq[static_cast<std::size_t>(l)];
   const std::vector<int> cl_len = HuffmanLengths(cl_freq, 7);
   const std::vector<std::uint32_t> cl_code = CanonicalCodes(cl_len);
-  static constexpr int kOrder[19] = {16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15};
+  static constexpr int kOrder[19] = {16, 17, 18, 0, 8,  7, 9,  6, 10, 5,
+                                     11, 4,  12, 3, 13, 2, 14, 1, 15};
   int hclen = 19;
   while (hclen > 4 && cl_len[static_cast<std::size_t>(kOrder[hclen - 1])] == 0) --hclen;
 
@@ -198,13 +208,15 @@ std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int h
   z.resize(2 + raw.size() * 15 / 8 + 1024);
   z[0] = 0x78, z[1] = 0x01;  // zlib header: deflate, 32 K window, no dictionary
   BitWriter bits(z.data() + 2);
-  bits.Put(1, 1);           // BFINAL
-  bits.Put(2, 2);           // BTYPE = dynamic Huffman
-  bits.Put(257 - 257, 5);   // HLIT
-  bits.Put(1 - 1, 5);       // HDIST
+  bits.Put(1, 1);          // BFINAL
+  bits.Put(2, 2);          // BTYPE = dynamic Huffman
+  bits.Put(257 - 257, 5);  // HLIT
+  bits.Put(1 - 1, 5);      // HDIST
   bits.Put(static_cast<std::uint32_t>(hclen - 4), 4);
-  for (int i = 0; i < hclen; ++i) bits.Put(static_cast<std::uint32_t>(cl_len[static_cast<std::size_t>(kOrder[i])]), 3);
-  for (int l : all) bits.Put(cl_code[static_cast<std::size_t>(l)], cl_len[static_cast<std::size_t>(l)]);
+  for (int i = 0; i < hclen; ++i)
+    bits.Put(static_cast<std::uint32_t>(cl_len[static_cast<std::size_t>(kOrder[i])]), 3);
+  for (int l : all)
+    bits.Put(cl_code[static_cast<std::size_t>(l)], cl_len[static_cast<std::size_t>(l)]);
   // Two bytes per step: the pair's codes joined (at most 30 bits).
   thread_local std::vector<std::uint32_t> pair_code(65536);
   thread_local std::vector<std::uint8_t> pair_len(65536);
@@ -231,7 +243,8 @@ std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int h
   std::vector<std::uint8_t> ihdr;
   PutBe32(&ihdr, static_cast<std::uint32_t>(width));
   PutBe32(&ihdr, static_cast<std::uint32_t>(height));
-  ihdr.insert(ihdr.end(), {8, static_cast<std::uint8_t>(c == 3 ? 2 : 0), 0, 0, 0});  // 8 bit, RGB or grey
+  ihdr.insert(ihdr.end(),
+              {8, static_cast<std::uint8_t>(c == 3 ? 2 : 0), 0, 0, 0});  // 8 bit, RGB or grey
   Chunk(&png, "IHDR", ihdr.data(), ihdr.size());
   Chunk(&png, "IDAT", z.data(), zsize);
   Chunk(&png, "IEND", nullptr, 0);

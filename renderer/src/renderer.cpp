@@ -1,9 +1,9 @@
 #include "inhand/renderer/renderer.hpp"
 
 #define GL_GLEXT_PROTOTYPES 1
-#include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
+#include <GL/osmesa.h>
 
 #include <algorithm>
 #include <cmath>
@@ -115,7 +115,8 @@ struct Renderer::Impl {
   OSMesaContext ctx = nullptr;
   std::vector<std::uint8_t> default_buffer = std::vector<std::uint8_t>(16 * 16 * 4);
   GLuint program = 0;
-  GLint u_model_cam = -1, u_proj = -1, u_color = -1, u_use_texture = -1, u_tex = -1, u_label = -1, u_unlit = -1, u_light = -1;
+  GLint u_model_cam = -1, u_proj = -1, u_color = -1, u_use_texture = -1, u_tex = -1, u_label = -1,
+        u_unlit = -1, u_light = -1;
   std::vector<GpuMesh> meshes;
   std::map<std::string, GLuint> textures;
   GLuint fbo = 0, rb_color = 0, rb_label = 0, rb_depthf = 0, rb_zbuffer = 0;
@@ -163,14 +164,17 @@ struct Renderer::Impl {
     if (auto it = textures.find(key); it != textures.end()) return it->second;
     cv::Mat bgr = !m.texture_file.empty() ? cv::imread(m.texture_file, cv::IMREAD_COLOR)
                                           : cv::imdecode(m.texture_blob, cv::IMREAD_COLOR);
-    if (bgr.empty()) throw InputError((m.texture_file.empty() ? std::string("embedded texture") : m.texture_file) + ": unreadable texture image");
+    if (bgr.empty())
+      throw InputError((m.texture_file.empty() ? std::string("embedded texture") : m.texture_file) +
+                       ": unreadable texture image");
     cv::Mat rgb;
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
     GLuint tex;
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                 rgb.data);
     glGenerateMipmap(GL_TEXTURE_2D);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -182,10 +186,20 @@ struct Renderer::Impl {
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
-  const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                         OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  const int attribs[] = {OSMESA_FORMAT,
+                         OSMESA_RGBA,
+                         OSMESA_DEPTH_BITS,
+                         24,
+                         OSMESA_PROFILE,
+                         OSMESA_CORE_PROFILE,
+                         OSMESA_CONTEXT_MAJOR_VERSION,
+                         3,
+                         OSMESA_CONTEXT_MINOR_VERSION,
+                         3,
+                         0};
   impl_->ctx = OSMesaCreateContextAttribs(attribs, nullptr);
-  if (impl_->ctx == nullptr) throw std::runtime_error("renderer: cannot create an OSMesa OpenGL 3.3 core context");
+  if (impl_->ctx == nullptr)
+    throw std::runtime_error("renderer: cannot create an OSMesa OpenGL 3.3 core context");
   impl_->MakeCurrent();
   const GLuint vs = Compile(GL_VERTEX_SHADER, kVertexShader);
   const GLuint fs = Compile(GL_FRAGMENT_SHADER, kFragmentShader);
@@ -217,7 +231,8 @@ std::string Renderer::Description() const {
   impl_->MakeCurrent();
   const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
-  return std::string("OSMesa: ") + (renderer ? renderer : "?") + ", OpenGL " + (version ? version : "?");
+  return std::string("OSMesa: ") + (renderer ? renderer : "?") + ", OpenGL " +
+         (version ? version : "?");
 }
 
 std::size_t Renderer::num_meshes() const { return impl_->meshes.size(); }
@@ -235,7 +250,8 @@ int Renderer::AddMesh(const TriangleMesh& mesh) {
     const Vec3& v = mesh.vertices[i];
     const Vec3 n = has_normals ? mesh.normals[i] : Vec3::UnitZ();
     const Vec2 uv = has_uv ? mesh.uvs[i] : Vec2::Zero();
-    for (double x : {v.x(), v.y(), v.z(), n.x(), n.y(), n.z(), uv.x(), uv.y()}) data.push_back(static_cast<float>(x));
+    for (double x : {v.x(), v.y(), v.z(), n.x(), n.y(), n.z(), uv.x(), uv.y()})
+      data.push_back(static_cast<float>(x));
   }
   std::vector<std::uint32_t> indices;
   indices.reserve(mesh.triangles.size() * 3);
@@ -245,17 +261,22 @@ int Renderer::AddMesh(const TriangleMesh& mesh) {
   glBindVertexArray(g.vao);
   glGenBuffers(1, &g.vbo);
   glBindBuffer(GL_ARRAY_BUFFER, g.vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(), GL_STATIC_DRAW);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
+               GL_STATIC_DRAW);
   glGenBuffers(1, &g.ebo);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(), GL_STATIC_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(),
+               GL_STATIC_DRAW);
   const GLsizei stride = 8 * sizeof(float);
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(3 * sizeof(float)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride,
+                        reinterpret_cast<void*>(3 * sizeof(float)));
   glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(6 * sizeof(float)));
+  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride,
+                        reinterpret_cast<void*>(6 * sizeof(float)));
   glBindVertexArray(0);
   g.count = static_cast<GLsizei>(indices.size());
   if (mesh.material.HasTexture() && has_uv) g.texture = impl_->Texture(mesh.material);
@@ -276,7 +297,8 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
   glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glColorMaski(2, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glDepthMask(GL_TRUE);
-  const float bg[4] = {static_cast<float>(scene.background.x()), static_cast<float>(scene.background.y()),
+  const float bg[4] = {static_cast<float>(scene.background.x()),
+                       static_cast<float>(scene.background.y()),
                        static_cast<float>(scene.background.z()), 1.0f};
   const GLuint zero_label[4] = {0, 0, 0, 0};
   const float zero_depth[4] = {0, 0, 0, 0};
@@ -291,7 +313,8 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
 
   const Eigen::Matrix4f proj = ProjectionMatrix(scene.K, scene.near, scene.far).cast<float>();
   glUniformMatrix4fv(r.u_proj, 1, GL_FALSE, proj.data());
-  const Eigen::Vector3f light = Eigen::Vector3f(-0.35f, -0.6f, -0.7f).normalized();  // above-left of the camera
+  const Eigen::Vector3f light =
+      Eigen::Vector3f(-0.35f, -0.6f, -0.7f).normalized();  // above-left of the camera
   glUniform3f(r.u_light, light.x(), light.y(), light.z());
   glUniform1i(r.u_tex, 0);
   const Transform T_CP = scene.T_PC.inverse();
@@ -304,7 +327,8 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
     glUniformMatrix4fv(r.u_model_cam, 1, GL_FALSE, model_cam.data());
     Eigen::Vector4d c = item.rgba ? *item.rgba : g.rgba;
     c[3] *= item.opacity;
-    glUniform4f(r.u_color, static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]), static_cast<float>(c[3]));
+    glUniform4f(r.u_color, static_cast<float>(c[0]), static_cast<float>(c[1]),
+                static_cast<float>(c[2]), static_cast<float>(c[3]));
     glUniform1i(r.u_use_texture, g.texture && !item.rgba ? 1 : 0);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, g.texture);
@@ -324,7 +348,8 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
     draw(item);
   }
   if (!translucent.empty()) {
-    std::stable_sort(translucent.begin(), translucent.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::stable_sort(translucent.begin(), translucent.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
     glEnablei(GL_BLEND, 0);
     glBlendFunci(0, GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
     glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
@@ -339,7 +364,8 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
   // Read back straight into the output: the projection put the top image row first.
   out.width = W;
   out.height = H;
-  if (out.colour.width != W || out.colour.height != H || out.colour.channels != 3) out.colour = Image8(W, H, 3);
+  if (out.colour.width != W || out.colour.height != H || out.colour.channels != 3)
+    out.colour = Image8(W, H, 3);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadBuffer(GL_COLOR_ATTACHMENT0);
   glReadPixels(0, 0, W, H, GL_RGB, GL_UNSIGNED_BYTE, out.colour.data.data());

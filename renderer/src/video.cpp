@@ -71,15 +71,21 @@ struct VideoWriter::Impl {
   ~Impl() { Free(); }
 };
 
-VideoWriter::VideoWriter(const std::string& path, double fps, int width, int height) : impl_(std::make_unique<Impl>()) {
-  if (width % 2 || height % 2) throw InputError(path + ": H.264 needs even frame sizes, got " + std::to_string(width) + "x" + std::to_string(height));
-  if (!(fps > 0.0 && fps <= 1000.0)) throw InputError(path + ": video frame rate " + std::to_string(fps) + " Hz, expected (0, 1000]");
+VideoWriter::VideoWriter(const std::string& path, double fps, int width, int height)
+    : impl_(std::make_unique<Impl>()) {
+  if (width % 2 || height % 2)
+    throw InputError(path + ": H.264 needs even frame sizes, got " + std::to_string(width) + "x" +
+                     std::to_string(height));
+  if (!(fps > 0.0 && fps <= 1000.0))
+    throw InputError(path + ": video frame rate " + std::to_string(fps) +
+                     " Hz, expected (0, 1000]");
   Impl& m = *impl_;
   m.path = path;
   m.width = width;
   m.height = height;
   av_log_set_level(AV_LOG_ERROR);
-  m.Check(avformat_alloc_output_context2(&m.format, nullptr, "mp4", path.c_str()), "cannot make an MP4 file");
+  m.Check(avformat_alloc_output_context2(&m.format, nullptr, "mp4", path.c_str()),
+          "cannot make an MP4 file");
   const AVCodec* encoder = avcodec_find_encoder_by_name("libx264");
   if (!encoder) encoder = avcodec_find_encoder(AV_CODEC_ID_H264);
   if (!encoder) throw InputError(path + ": this FFmpeg has no H.264 encoder");
@@ -98,10 +104,12 @@ VideoWriter::VideoWriter(const std::string& path, double fps, int width, int hei
   av_opt_set(m.codec->priv_data, "preset", "veryfast", 0);
   av_opt_set(m.codec->priv_data, "crf", "23", 0);
   m.Check(avcodec_open2(m.codec, encoder, nullptr), "cannot open the H.264 encoder");
-  m.Check(avcodec_parameters_from_context(m.stream->codecpar, m.codec), "cannot set the video stream");
+  m.Check(avcodec_parameters_from_context(m.stream->codecpar, m.codec),
+          "cannot set the video stream");
   m.stream->time_base = m.codec->time_base;
   m.stream->avg_frame_rate = rate;
-  m.Check(avio_open(&m.format->pb, path.c_str(), AVIO_FLAG_WRITE), "cannot open the video file for writing");
+  m.Check(avio_open(&m.format->pb, path.c_str(), AVIO_FLAG_WRITE),
+          "cannot open the video file for writing");
   m.Check(avformat_write_header(m.format, nullptr), "cannot write the video header");
   m.frame = av_frame_alloc();
   m.packet = av_packet_alloc();
@@ -110,7 +118,8 @@ VideoWriter::VideoWriter(const std::string& path, double fps, int width, int hei
   m.frame->width = width;
   m.frame->height = height;
   m.Check(av_frame_get_buffer(m.frame, 0), "cannot allocate a video frame");
-  m.sws = sws_getContext(width, height, AV_PIX_FMT_RGB24, width, height, AV_PIX_FMT_YUV420P, SWS_BILINEAR, nullptr, nullptr, nullptr);
+  m.sws = sws_getContext(width, height, AV_PIX_FMT_RGB24, width, height, AV_PIX_FMT_YUV420P,
+                         SWS_BILINEAR, nullptr, nullptr, nullptr);
   if (!m.sws) throw InputError(path + ": cannot convert RGB to YUV");
   m.open = true;
 }
@@ -125,7 +134,8 @@ VideoWriter::~VideoWriter() {
 void VideoWriter::Write(const Image8& image) {
   Impl& m = *impl_;
   INHAND_CHECK(m.open, "VideoWriter::Write after Close");
-  INHAND_CHECK(image.width == m.width && image.height == m.height && image.channels == 3, "video frames must be RGB of the writer's size");
+  INHAND_CHECK(image.width == m.width && image.height == m.height && image.channels == 3,
+               "video frames must be RGB of the writer's size");
   m.Check(av_frame_make_writable(m.frame), "cannot write a video frame");
   const std::uint8_t* src[1] = {image.data.data()};
   const int stride[1] = {3 * image.width};

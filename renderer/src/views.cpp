@@ -11,7 +11,8 @@ std::optional<Eigen::Vector4d> LegibleColour(const Material& material) {
   const double luminance = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
   if (!(luminance < kLegibleBelow)) return std::nullopt;
   const double grey = kLegibleLuminance - std::max(0.0, luminance);
-  return Eigen::Vector4d(std::max(0.0, c[0]) + grey, std::max(0.0, c[1]) + grey, std::max(0.0, c[2]) + grey, c[3]);
+  return Eigen::Vector4d(std::max(0.0, c[0]) + grey, std::max(0.0, c[1]) + grey,
+                         std::max(0.0, c[2]) + grey, c[3]);
 }
 
 HandMeshes UploadHand(Renderer& renderer, const HandModel& hand) {
@@ -26,19 +27,22 @@ HandMeshes UploadHand(Renderer& renderer, const HandModel& hand) {
   return out;
 }
 
-std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object, const std::vector<TriangleMesh>& printed) {
+std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object,
+                              const std::vector<TriangleMesh>& printed) {
   std::vector<int> ids;
   for (const TriangleMesh& m : object.visual) ids.push_back(renderer.AddMesh(m));
   for (const TriangleMesh& m : printed) ids.push_back(renderer.AddMesh(m));
   return ids;
 }
 
-void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform>& T_PL, double opacity, bool legible) {
+void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform>& T_PL,
+             double opacity, bool legible) {
   for (std::size_t l = 0; l < meshes.link_meshes.size(); ++l)
     for (std::size_t k = 0; k < meshes.link_meshes[l].size(); ++k) {
       SceneItem item;
       item.mesh = meshes.link_meshes[l][k];
-      if (legible && l < meshes.legible_rgba.size() && k < meshes.legible_rgba[l].size()) item.rgba = meshes.legible_rgba[l][k];
+      if (legible && l < meshes.legible_rgba.size() && k < meshes.legible_rgba[l].size())
+        item.rgba = meshes.legible_rgba[l][k];
       item.T_PM = T_PL.at(l);
       item.label = static_cast<std::uint16_t>(kHandLabelBase + l);
       item.opacity = opacity;
@@ -46,7 +50,8 @@ void AddHand(Scene& scene, const HandMeshes& meshes, const std::vector<Transform
     }
 }
 
-void AddObject(Scene& scene, const std::vector<int>& meshes, const Transform& T_PO, const ObjectStyle& style) {
+void AddObject(Scene& scene, const std::vector<int>& meshes, const Transform& T_PO,
+               const ObjectStyle& style) {
   for (int id : meshes) {
     SceneItem item;
     item.mesh = id;
@@ -59,8 +64,9 @@ void AddObject(Scene& scene, const std::vector<int>& meshes, const Transform& T_
   }
 }
 
-Scene CameraScene(const HandMeshes& hand, const std::vector<Transform>& T_PL, const std::vector<int>& object,
-                  const Transform& T_PO, const Transform& T_PC, const Intrinsics& K, const Vec3& background) {
+Scene CameraScene(const HandMeshes& hand, const std::vector<Transform>& T_PL,
+                  const std::vector<int>& object, const Transform& T_PO, const Transform& T_PC,
+                  const Intrinsics& K, const Vec3& background) {
   Scene scene;
   scene.K = K;
   scene.T_PC = T_PC;
@@ -81,11 +87,13 @@ Transform LookAt(const Vec3& eye, const Vec3& target, const Vec3& up) {
   return MakeTransform(eye, R);
 }
 
-Transform OrbitCamera(const Vec3& center, double distance, double azimuth, double elevation, const Vec3& up) {
+Transform OrbitCamera(const Vec3& center, double distance, double azimuth, double elevation,
+                      const Vec3& up) {
   const Vec3 u = up.normalized();
   const Vec3 a = u.unitOrthogonal();
   const Vec3 b = u.cross(a);
-  const Vec3 dir = std::cos(elevation) * (std::cos(azimuth) * a + std::sin(azimuth) * b) + std::sin(elevation) * u;
+  const Vec3 dir = std::cos(elevation) * (std::cos(azimuth) * a + std::sin(azimuth) * b) +
+                   std::sin(elevation) * u;
   return LookAt(center + distance * dir, center, u);
 }
 

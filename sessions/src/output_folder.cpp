@@ -46,17 +46,20 @@ std::string WhyNotReplaceable(const fs::path& p) {
 fs::path CheckOutputFolder(const std::string& out, const std::vector<std::string>& inputs) {
   if (out.empty()) throw InputError("--out: empty path");
   const fs::path target = Resolved(out);
-  if (target == target.root_path()) throw InputError(out + ": the root folder cannot be an output folder");
+  if (target == target.root_path())
+    throw InputError(out + ": the root folder cannot be an output folder");
   std::error_code ec;
   const fs::path cwd = Resolved(fs::current_path(ec).string());
   if (!ec && Contains(target, cwd))
-    throw InputError(out + ": is the current folder or one of its ancestors (" + target.string() + "); not replaced");
+    throw InputError(out + ": is the current folder or one of its ancestors (" + target.string() +
+                     "); not replaced");
   for (const std::string& input : inputs) {
     if (input.empty()) continue;
     if (Contains(target, Resolved(input)))
       throw InputError(out + ": is the input " + input + " or one of its ancestors; not replaced");
   }
-  if (const std::string why = WhyNotReplaceable(target); !why.empty()) throw InputError(out + ": " + why);
+  if (const std::string why = WhyNotReplaceable(target); !why.empty())
+    throw InputError(out + ": " + why);
   return target;
 }
 
@@ -65,12 +68,15 @@ fs::path PrepareStaging(const fs::path& target) {
   const std::string prefix = "." + target.filename().string() + ".tmp-";
   std::error_code ec;
   fs::create_directories(parent, ec);
-  if (ec) throw InputError(parent.string() + ": cannot create the output's parent folder (" + ec.message() + ")");
+  if (ec)
+    throw InputError(parent.string() + ": cannot create the output's parent folder (" +
+                     ec.message() + ")");
   for (const fs::directory_entry& e : fs::directory_iterator(parent, ec)) {
     const std::string name = e.path().filename().string();
     if (name.rfind(prefix, 0) != 0) continue;
     const std::string pid = name.substr(prefix.size());
-    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos || pid.size() > 9) continue;
+    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos || pid.size() > 9)
+      continue;
     const pid_t p = static_cast<pid_t>(std::stol(pid));
     if (p == ::getpid()) continue;
     if (::kill(p, 0) == 0 || errno == EPERM) continue;  // that run is still going
@@ -92,7 +98,9 @@ void CommitStaging(const fs::path& staging, const fs::path& target, const std::s
   fs::remove_all(target, ec);
   if (ec) throw InputError(target.string() + ": cannot replace (" + ec.message() + ")");
   fs::rename(staging, target, ec);
-  if (ec) throw InputError(target.string() + ": cannot move the output into place (" + ec.message() + ")");
+  if (ec)
+    throw InputError(target.string() + ": cannot move the output into place (" + ec.message() +
+                     ")");
 }
 
 }  // namespace inhand

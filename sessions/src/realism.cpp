@@ -44,7 +44,8 @@ const std::array<std::uint8_t, kEncodeSteps + 1>& EncodeTable() {
   static const std::array<std::uint8_t, kEncodeSteps + 1> table = [] {
     std::array<std::uint8_t, kEncodeSteps + 1> t{};
     for (int i = 0; i <= kEncodeSteps; ++i)
-      t[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(std::lround(255.0 * std::pow(double(i) / kEncodeSteps, 1.0 / 2.2)));
+      t[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(
+          std::lround(255.0 * std::pow(double(i) / kEncodeSteps, 1.0 / 2.2)));
     return t;
   }();
   return table;
@@ -54,25 +55,44 @@ const std::array<std::uint8_t, kEncodeSteps + 1>& EncodeTable() {
 
 const char* EffectName(Effect e) {
   switch (e) {
-    case Effect::kObjectScale: return "object.scale";
-    case Effect::kObjectTags: return "object.tags";
-    case Effect::kObjectColour: return "object.colour";
-    case Effect::kHandGeometry: return "hand.geometry";
-    case Effect::kHandDeflection: return "hand.deflection";
-    case Effect::kHandPads: return "hand.pads";
-    case Effect::kTorqueDrift: return "torque.drift";
-    case Effect::kTorqueResidue: return "torque.residue";
-    case Effect::kTorqueLag: return "torque.lag";
-    case Effect::kCameraLight: return "camera.light";
-    case Effect::kCameraExposure: return "camera.exposure";
-    case Effect::kCameraVignetting: return "camera.vignetting";
-    case Effect::kCameraDistortion: return "camera.distortion";
-    case Effect::kCameraMotionBlur: return "camera.motion_blur";
-    case Effect::kCameraSensorNoise: return "camera.sensor_noise";
-    case Effect::kCameraJpeg: return "camera.jpeg";
-    case Effect::kCameraIntrinsics: return "camera.intrinsics";
-    case Effect::kObjectMesh: return "object.mesh";
-    case Effect::kCount: break;
+    case Effect::kObjectScale:
+      return "object.scale";
+    case Effect::kObjectTags:
+      return "object.tags";
+    case Effect::kObjectColour:
+      return "object.colour";
+    case Effect::kHandGeometry:
+      return "hand.geometry";
+    case Effect::kHandDeflection:
+      return "hand.deflection";
+    case Effect::kHandPads:
+      return "hand.pads";
+    case Effect::kTorqueDrift:
+      return "torque.drift";
+    case Effect::kTorqueResidue:
+      return "torque.residue";
+    case Effect::kTorqueLag:
+      return "torque.lag";
+    case Effect::kCameraLight:
+      return "camera.light";
+    case Effect::kCameraExposure:
+      return "camera.exposure";
+    case Effect::kCameraVignetting:
+      return "camera.vignetting";
+    case Effect::kCameraDistortion:
+      return "camera.distortion";
+    case Effect::kCameraMotionBlur:
+      return "camera.motion_blur";
+    case Effect::kCameraSensorNoise:
+      return "camera.sensor_noise";
+    case Effect::kCameraJpeg:
+      return "camera.jpeg";
+    case Effect::kCameraIntrinsics:
+      return "camera.intrinsics";
+    case Effect::kObjectMesh:
+      return "object.mesh";
+    case Effect::kCount:
+      break;
   }
   return "?";
 }
@@ -102,8 +122,10 @@ Effects Effects::Parse(const std::string& list, const std::string& option) {
     }
     if (!found) {
       std::string names = "all, object, hand, torque, camera";
-      for (std::size_t i = 0; i < kNumEffects; ++i) names += std::string(", ") + EffectName(static_cast<Effect>(i));
-      throw InputError(option + ": effect '" + name + "' is unknown, expected a comma-separated list of: " + names);
+      for (std::size_t i = 0; i < kNumEffects; ++i)
+        names += std::string(", ") + EffectName(static_cast<Effect>(i));
+      throw InputError(option + ": effect '" + name +
+                       "' is unknown, expected a comma-separated list of: " + names);
     }
   }
   return e;
@@ -116,7 +138,8 @@ Effects Effects::Without(const Effects& other) const {
 }
 
 bool Effects::AnyCamera() const {  // light to JPEG: the intrinsics' error needs no simulation
-  for (std::size_t i = static_cast<std::size_t>(Effect::kCameraLight); i <= static_cast<std::size_t>(Effect::kCameraJpeg); ++i)
+  for (std::size_t i = static_cast<std::size_t>(Effect::kCameraLight);
+       i <= static_cast<std::size_t>(Effect::kCameraJpeg); ++i)
     if (bits_[i]) return true;
   return false;
 }
@@ -153,14 +176,15 @@ ObjectModel ScaledObject(const ObjectModel& object, const Vec3& s) {
   return w;
 }
 
-SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& object_json, const std::string& object_dir,
-                              const RealismParams& params) {
+SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& object_json,
+                              const std::string& object_dir, const RealismParams& params) {
   SimplifiedModel out;
   std::vector<TriangleMesh> meshes;
   std::vector<std::string> textures;
   for (std::size_t i = 0; i < model.visual.size(); ++i) {
     const TriangleMesh& m = model.visual[i];
-    const auto target = static_cast<std::size_t>(std::ceil(params.simplify_fraction * static_cast<double>(m.num_triangles())));
+    const auto target = static_cast<std::size_t>(
+        std::ceil(params.simplify_fraction * static_cast<double>(m.num_triangles())));
     meshes.push_back(SimplifyMesh(m, target, params.simplify_error));
     out.triangles_before += m.num_triangles();
     out.triangles_after += meshes.back().num_triangles();
@@ -169,12 +193,14 @@ SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& objec
       texture = fs::relative(m.material.texture_file, object_dir).generic_string();
     } else if (!m.material.texture_blob.empty()) {
       texture = "simplified_texture_" + std::to_string(i) + ".png";
-      out.files.emplace_back(texture, std::string(m.material.texture_blob.begin(), m.material.texture_blob.end()));
+      out.files.emplace_back(
+          texture, std::string(m.material.texture_blob.begin(), m.material.texture_blob.end()));
     }
     textures.push_back(texture);
   }
   const ObjText text = MeshesObjText(meshes, "simplified.mtl", textures);
-  const std::vector<ConvexPiece> pieces = SlabHulls(meshes, params.slab, params.max_slabs, model.name + " (simplified)");
+  const std::vector<ConvexPiece> pieces =
+      SlabHulls(meshes, params.slab, params.max_slabs, model.name + " (simplified)");
   out.pieces_before = model.pieces.size();
   out.pieces_after = pieces.size();
   jsonf::Json doc;
@@ -184,7 +210,8 @@ SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& objec
     throw InputError(model.source + ": " + e.what());
   }
   doc["visual"] = jsonf::Json::array({{{"mesh", "simplified.obj"}}});
-  doc["collision"] = jsonf::Json::array({{{"mesh", "simplified_pieces.obj"}, {"method", "components"}}});
+  doc["collision"] =
+      jsonf::Json::array({{{"mesh", "simplified_pieces.obj"}, {"method", "components"}}});
   out.files.emplace_back("simplified.obj", text.obj);
   out.files.emplace_back("simplified.mtl", text.mtl);
   out.files.emplace_back("simplified_pieces.obj", PiecesObjText(pieces));
@@ -196,13 +223,16 @@ void TintObject(ObjectModel& object, const Vec3& gains) {
   for (TriangleMesh& m : object.visual) {
     m.material.rgba.head<3>() = m.material.rgba.head<3>().cwiseProduct(gains).cwiseMin(1.0);
     if (!m.material.HasTexture()) continue;
-    cv::Mat tex = m.material.texture_blob.empty() ? cv::imread(m.material.texture_file, cv::IMREAD_COLOR)
-                                                  : cv::imdecode(m.material.texture_blob, cv::IMREAD_COLOR);
-    if (tex.empty()) throw InputError(object.source + ": texture of material '" + m.material.name + "' does not decode");
+    cv::Mat tex = m.material.texture_blob.empty()
+                      ? cv::imread(m.material.texture_file, cv::IMREAD_COLOR)
+                      : cv::imdecode(m.material.texture_blob, cv::IMREAD_COLOR);
+    if (tex.empty())
+      throw InputError(object.source + ": texture of material '" + m.material.name +
+                       "' does not decode");
     cv::Mat f;
     tex.convertTo(f, CV_32FC3);
     cv::multiply(f, cv::Scalar(gains.z(), gains.y(), gains.x()), f);  // BGR
-    f.convertTo(tex, CV_8UC3);  // saturates
+    f.convertTo(tex, CV_8UC3);                                        // saturates
     std::vector<std::uint8_t> png;
     cv::imencode(".png", tex, png);
     m.material.texture_blob = std::move(png);
@@ -219,7 +249,8 @@ void MisplaceTags(ObjectModel& object, double position, double orientation, std:
   }
 }
 
-HandModel PerturbedHand(const HandModel& hand, double sigma, std::mt19937& rng, std::vector<Vec3>* offsets) {
+HandModel PerturbedHand(const HandModel& hand, double sigma, std::mt19937& rng,
+                        std::vector<Vec3>* offsets) {
   HandModel h = hand;
   std::normal_distribution<double> n(0.0, sigma);
   if (offsets) offsets->clear();
@@ -231,14 +262,20 @@ HandModel PerturbedHand(const HandModel& hand, double sigma, std::mt19937& rng, 
   return h;
 }
 
-TorqueErrors::TorqueErrors(int joints, const RealismParams& params, const Effects& effects, std::mt19937& rng)
-    : params_(params), effects_(effects), rng_(rng()), drift_(Eigen::VectorXd::Zero(joints)), lagged_(Eigen::VectorXd::Zero(joints)) {
+TorqueErrors::TorqueErrors(int joints, const RealismParams& params, const Effects& effects,
+                           std::mt19937& rng)
+    : params_(params),
+      effects_(effects),
+      rng_(rng()),
+      drift_(Eigen::VectorXd::Zero(joints)),
+      lagged_(Eigen::VectorXd::Zero(joints)) {
   std::normal_distribution<double> n(0.0, 1.0);
   if (effects_.Has(Effect::kTorqueDrift))
     for (int j = 0; j < joints; ++j) drift_[j] = params_.drift_sigma * n(rng_);  // stationary start
 }
 
-Eigen::VectorXd TorqueErrors::Step(double dt, const Eigen::VectorXd& tau_contact, const Eigen::VectorXd& q_dot,
+Eigen::VectorXd TorqueErrors::Step(double dt, const Eigen::VectorXd& tau_contact,
+                                   const Eigen::VectorXd& q_dot,
                                    const Eigen::VectorXd& tau_gravity) {
   Eigen::VectorXd tau = tau_contact;
   if (effects_.Has(Effect::kTorqueDrift)) {
@@ -249,7 +286,8 @@ Eigen::VectorXd TorqueErrors::Step(double dt, const Eigen::VectorXd& tau_contact
     tau += drift_;
   }
   if (effects_.Has(Effect::kTorqueResidue)) {
-    for (int j = 0; j < tau.size(); ++j) tau[j] += params_.friction_residue * std::tanh(q_dot[j] / params_.friction_velocity);
+    for (int j = 0; j < tau.size(); ++j)
+      tau[j] += params_.friction_residue * std::tanh(q_dot[j] / params_.friction_velocity);
     tau += params_.gravity_residue * tau_gravity;
   }
   if (!effects_.Has(Effect::kTorqueLag)) return tau;
@@ -259,9 +297,15 @@ Eigen::VectorXd TorqueErrors::Step(double dt, const Eigen::VectorXd& tau_contact
   return lagged_;
 }
 
-CameraSimulator::CameraSimulator(Renderer& renderer, const Intrinsics& K_true, const RealismParams& params,
-                                 const Effects& effects, const LightRig& light, unsigned seed)
-    : renderer_(renderer), K_(K_true), params_(params), effects_(effects), light_(light), rng_(seed) {
+CameraSimulator::CameraSimulator(Renderer& renderer, const Intrinsics& K_true,
+                                 const RealismParams& params, const Effects& effects,
+                                 const LightRig& light, unsigned seed)
+    : renderer_(renderer),
+      K_(K_true),
+      params_(params),
+      effects_(effects),
+      light_(light),
+      rng_(seed) {
   if (!effects_.Has(Effect::kCameraDistortion)) K_.distortion = {0, 0, 0, 0, 0};
   const int W = K_.width, H = K_.height;
   map_x_.resize(std::size_t(W) * H);
@@ -319,7 +363,8 @@ void CameraSimulator::RenderPadded(const Scene& scene, std::vector<float>& rgb) 
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
       const float z = out.depth_at(x, y);
-      points_[std::size_t(y) * W + x] = std::isfinite(z) ? s.K.Unproject(Vec2(x, y), z) : Vec3(0, 0, -1);
+      points_[std::size_t(y) * W + x] =
+          std::isfinite(z) ? s.K.Unproject(Vec2(x, y), z) : Vec3(0, 0, -1);
     }
   const auto side = [&](int x, int y, int dx, int dy) -> Vec3 {
     const Vec3& p = points_[std::size_t(y) * W + x];
@@ -344,7 +389,8 @@ void CameraSimulator::RenderPadded(const Scene& scene, std::vector<float>& rgb) 
   const Vec3 eye = s.T_PC.translation();
   const double d_target2 = (light_.lamp - light_.lamp_target).squaredNorm();
   const Vec3 fill = light_.fill_direction.normalized();
-  const Vec3 bg(std::pow(scene.background.x(), 2.2), std::pow(scene.background.y(), 2.2), std::pow(scene.background.z(), 2.2));
+  const Vec3 bg(std::pow(scene.background.x(), 2.2), std::pow(scene.background.y(), 2.2),
+                std::pow(scene.background.z(), 2.2));
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
       const std::size_t i = std::size_t(y) * W + x;
@@ -368,7 +414,8 @@ void CameraSimulator::RenderPadded(const Scene& scene, std::vector<float>& rgb) 
         const Vec3 X_L = T_LP * P;
         const Vec2 uv = KL.Project(X_L);
         const double bias = 0.003 + 0.006 * (1.0 - cos_l);
-        const int u0 = static_cast<int>(std::floor(uv.x() + 0.5)), v0 = static_cast<int>(std::floor(uv.y() + 0.5));
+        const int u0 = static_cast<int>(std::floor(uv.x() + 0.5)),
+                  v0 = static_cast<int>(std::floor(uv.y() + 0.5));
         int lit = 0;
         for (int v = v0 - 1; v <= v0 + 1; ++v)
           for (int u = u0 - 1; u <= u0 + 1; ++u)
@@ -378,10 +425,13 @@ void CameraSimulator::RenderPadded(const Scene& scene, std::vector<float>& rgb) 
         const double power = light_.lamp_power * visible * d_target2 / d2;
         lamp = power * cos_l;
         const double nh = std::max(nrm.dot((l + view).normalized()), 0.0);
-        if (visible > 0 && nh > 0.7) spec = light_.specular * power * std::pow(nh, light_.shininess);
+        if (visible > 0 && nh > 0.7)
+          spec = light_.specular * power * std::pow(nh, light_.shininess);
       }
-      const Vec3 E = light_.ambient + light_.lamp_colour * lamp + light_.fill_colour * std::max(nrm.dot(fill), 0.0);
-      for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(px[c] * E[c] + light_.lamp_colour[c] * spec);
+      const Vec3 E = light_.ambient + light_.lamp_colour * lamp +
+                     light_.fill_colour * std::max(nrm.dot(fill), 0.0);
+      for (int c = 0; c < 3; ++c)
+        px[c] = static_cast<float>(px[c] * E[c] + light_.lamp_colour[c] * spec);
     }
 }
 
@@ -407,8 +457,8 @@ void CameraSimulator::Capture(const std::vector<Scene>& subframes, Image8& out) 
   sum /= static_cast<double>(subframes.size());
   // The lens: distorted output pixels sample the ideal image.
   cv::Mat img;
-  cv::remap(sum, img, cv::Mat(H, W, CV_32F, map_x_.data()), cv::Mat(H, W, CV_32F, map_y_.data()), cv::INTER_LINEAR,
-            cv::BORDER_REPLICATE);
+  cv::remap(sum, img, cv::Mat(H, W, CV_32F, map_x_.data()), cv::Mat(H, W, CV_32F, map_y_.data()),
+            cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   // Exposure and white balance drift: AR(1) per frame in log gain, started stationary.
   std::normal_distribution<double> n01(0.0, 1.0);
   if (effects_.Has(Effect::kCameraExposure)) {
@@ -418,7 +468,9 @@ void CameraSimulator::Capture(const std::vector<Scene>& subframes, Image8& out) 
       for (int c = 0; c < 3; ++c) white_balance_[c] = params_.white_balance_sigma * n01(rng_);
     } else {
       exposure_ = rho * exposure_ + innov * params_.exposure_sigma * n01(rng_);
-      for (int c = 0; c < 3; ++c) white_balance_[c] = rho * white_balance_[c] + innov * params_.white_balance_sigma * n01(rng_);
+      for (int c = 0; c < 3; ++c)
+        white_balance_[c] =
+            rho * white_balance_[c] + innov * params_.white_balance_sigma * n01(rng_);
     }
     started_ = true;
   } else {
@@ -448,9 +500,11 @@ void CameraSimulator::Capture(const std::vector<Scene>& subframes, Image8& out) 
       std::uint8_t* px = out.pixel(x, y);
       for (int c = 0; c < 3; ++c) {
         double s = std::max(0.0, double(row[x][c]) * v * gain[c]);
-        if (nrow) {  // shot noise (Poisson, as a Gaussian of its variance) and read noise, in electrons
+        if (nrow) {  // shot noise (Poisson, as a Gaussian of its variance) and read noise, in
+                     // electrons
           const double e = s * params_.full_well;
-          s = (e + std::sqrt(e + params_.read_noise * params_.read_noise) * nrow[x][c]) / params_.full_well;
+          s = (e + std::sqrt(e + params_.read_noise * params_.read_noise) * nrow[x][c]) /
+              params_.full_well;
         }
         px[c] = encode[static_cast<std::size_t>(std::clamp(s, 0.0, 1.0) * kEncodeSteps + 0.5)];
       }

@@ -23,16 +23,16 @@ struct Scenario {
   Vec3 camera_eye = Vec3(0.25, -0.36, 0.33);
   Vec3 camera_target = Vec3(0.0, 0.0, 0.1);
   std::vector<Keyframe> keys;
-  double grasp_closed = 0.0;               // [s] when the fingers have closed (for checks)
-  double record_start = 1.0;               // [s] the hand is in place: the session begins
-  double close_start = 0.0;                // [s] when closing starts
+  double grasp_closed = 0.0;  // [s] when the fingers have closed (for checks)
+  double record_start = 1.0;  // [s] the hand is in place: the session begins
+  double close_start = 0.0;   // [s] when closing starts
   // Where the estimator starts, as in the paper's experiment: from the tracking system (Exp.
   // II-IV: "if not stated otherwise, the initial pose of the object was provided by the tracking
   // system"), purposely set too high (Exp. I: "20 mm higher"), or placed by hand (Exp. V: the
   // pen, "manually set ... roughly aligning it"). The noise profile says how far off each is.
   enum class Start { kTracked, kTooHigh, kByHand };
   Start start = Start::kTracked;
-  struct Prop {                                   // a static box on the table (e.g. a book)
+  struct Prop {  // a static box on the table (e.g. a book)
     Transform T_W = Transform::Identity();
     Vec3 half_extents = Vec3::Zero();
     Eigen::Vector4d rgba{0.5, 0.5, 0.5, 1.0};

@@ -84,14 +84,16 @@ Csv ReadCsv(const std::string& path, OnRow&& on_row) {
       std::set<std::string> seen;
       for (const std::string& h : csv.header)
         if (!seen.insert(h).second)
-          throw InputError(path + ":" + std::to_string(number) + ": column '" + h + "' appears twice");
+          throw InputError(path + ":" + std::to_string(number) + ": column '" + h +
+                           "' appears twice");
       continue;
     }
     row.line = number;
     SplitCsvLine(line, row.fields);
     if (row.fields.size() != csv.header.size())
-      throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(row.fields.size()) +
-                       " columns, expected " + std::to_string(csv.header.size()) + " as in the header");
+      throw InputError(path + ":" + std::to_string(number) + ": " +
+                       std::to_string(row.fields.size()) + " columns, expected " +
+                       std::to_string(csv.header.size()) + " as in the header");
     ++csv.rows;
     on_row(csv, row);
   }
@@ -133,8 +135,8 @@ class TimeColumn {
   double operator()(const Csv& csv, const CsvRow& row) {
     const double t = ParseNumber(csv, row, 0);
     if (!(std::abs(t) <= kMaxTime))
-      throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) + " s, expected within +-1e9 s" +
-                       " (times count from the recording's start)");
+      throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) +
+                       " s, expected within +-1e9 s" + " (times count from the recording's start)");
     if (!(t > prev_))
       throw InputError(csv.file + ":" + std::to_string(row.line) + ": time " + FormatDouble(t) +
                        " does not increase (previous " + FormatDouble(prev_) + ")");
@@ -148,15 +150,17 @@ class TimeColumn {
 
 // px,py,pz,qw,qx,qy,qz starting at column `c`.
 Transform ParsePose(const Csv& csv, const CsvRow& row, std::size_t c) {
-  const Vec3 p(ParseNumber(csv, row, c), ParseNumber(csv, row, c + 1), ParseNumber(csv, row, c + 2));
+  const Vec3 p(ParseNumber(csv, row, c), ParseNumber(csv, row, c + 1),
+               ParseNumber(csv, row, c + 2));
   const Quat q(ParseNumber(csv, row, c + 3), ParseNumber(csv, row, c + 4),
                ParseNumber(csv, row, c + 5), ParseNumber(csv, row, c + 6));
   if (std::abs(q.norm() - 1.0) > 1e-3)
-    throw InputError(csv.file + ":" + std::to_string(row.line) + ": quaternion (qw, qx, qy, qz) has norm " +
-                     FormatDouble(q.norm()) + ", expected 1 ± 1e-3");
+    throw InputError(csv.file + ":" + std::to_string(row.line) +
+                     ": quaternion (qw, qx, qy, qz) has norm " + FormatDouble(q.norm()) +
+                     ", expected 1 ± 1e-3");
   if (!(p.norm() <= kMaxDistance))
-    throw InputError(csv.file + ":" + std::to_string(row.line) + ": position (px, py, pz) is " + FormatDouble(p.norm()) +
-                     " m from the palm, expected within 10 m");
+    throw InputError(csv.file + ":" + std::to_string(row.line) + ": position (px, py, pz) is " +
+                     FormatDouble(p.norm()) + " m from the palm, expected within 10 m");
   return MakeTransform(p, q);
 }
 
@@ -219,7 +223,9 @@ Session Session::Load(const std::string& dir) {
       for (auto it = ks.value.begin(); it != ks.value.end(); ++it)
         info.joint_stiffness[it.key()] = ks[it.key()].PositiveNumber("N m/rad");
     } else {
-      ks.Fail("a stiffness > 0 in N m/rad for every joint, or an object {\"JOINT\": N m/rad, \"*\": for the rest}");
+      ks.Fail(
+          "a stiffness > 0 in N m/rad for every joint, or an object {\"JOINT\": N m/rad, \"*\": "
+          "for the rest}");
     }
   }
   info.object = root["object"]["model"].String();
@@ -250,7 +256,8 @@ Session Session::Load(const std::string& dir) {
   }
   const jsonf::Field init = root["initial_estimate"];
   info.initial_T_PO = init["T_PO"].Pose();
-  if (!(info.initial_T_PO.translation().norm() <= kMaxDistance)) init["T_PO"]["xyz"].Fail("a position within 10 m of the palm");
+  if (!(info.initial_T_PO.translation().norm() <= kMaxDistance))
+    init["T_PO"]["xyz"].Fail("a position within 10 m of the palm");
   // The ranges that keep the filter's arithmetic finite (StartSigmas::Validate).
   const auto within = [](const jsonf::Field& f, double lo, double hi, const char* expected) {
     const double v = f.Number();
@@ -258,8 +265,10 @@ Session Session::Load(const std::string& dir) {
     return v;
   };
   info.sigma_position = within(init["sigma_position"], 1e-6, 10.0, "a number in [1e-6, 10] m");
-  info.sigma_orientation = within(init["sigma_orientation"], 1e-6, 2 * M_PI, "a number in [1e-6, 2 pi] rad");
-  info.sigma_joint_bias = within(init["sigma_joint_bias"], 0.0, 2 * M_PI, "a number in [0, 2 pi] rad");
+  info.sigma_orientation =
+      within(init["sigma_orientation"], 1e-6, 2 * M_PI, "a number in [1e-6, 2 pi] rad");
+  info.sigma_joint_bias =
+      within(init["sigma_joint_bias"], 0.0, 2 * M_PI, "a number in [0, 2 pi] rad");
   if (root.Has("provenance")) info.provenance_json = root["provenance"].value.dump();
 
   // joints.csv: t, q:<joint>..., then tau:<joint>... for the same joints or no torque columns at
@@ -267,34 +276,41 @@ Session Session::Load(const std::string& dir) {
   std::size_t m = 0, m_tau = 0;
   std::vector<double> q_rows, tau_rows;
   TimeColumn joint_time;
-  const Csv joints = ReadCsv((fs::path(dir) / "joints.csv").string(), [&](const Csv& csv, const CsvRow& row) {
-    if (m == 0) {  // the header, checked at the first row
-      if (csv.header.empty() || csv.header[0] != "t") throw InputError(csv.file + ":1: first column must be 't'");
-      while (1 + m < csv.header.size() && csv.header[1 + m].rfind("q:", 0) == 0) ++m;
-      const std::size_t rest = csv.header.size() - 1 - m;
-      if (m == 0 || (rest != 0 && rest != m))
-        throw InputError(csv.file + ":1: expected t, then q:NAME for every joint, then tau:NAME for "
-                         "every joint or no torque columns (got " + std::to_string(m) + " q: and " +
-                         std::to_string(rest) + " other columns after t)");
-      m_tau = rest;
-      for (std::size_t j = 0; j < m; ++j) {
-        const std::string& qh = csv.header[1 + j];
-        if (qh.size() < 3)
-          throw InputError(csv.file + ":1: column " + std::to_string(2 + j) + " is '" + qh + "', expected q:NAME");
-        const std::string name = qh.substr(2);
-        if (m_tau > 0) {
-          const std::string& th = csv.header[1 + m + j];
-          if (th != "tau:" + name)
-            throw InputError(csv.file + ":1: column " + std::to_string(2 + m + j) + " is '" + th +
-                             "', expected 'tau:" + name + "' (torques in the order of the positions)");
+  const Csv joints =
+      ReadCsv((fs::path(dir) / "joints.csv").string(), [&](const Csv& csv, const CsvRow& row) {
+        if (m == 0) {  // the header, checked at the first row
+          if (csv.header.empty() || csv.header[0] != "t")
+            throw InputError(csv.file + ":1: first column must be 't'");
+          while (1 + m < csv.header.size() && csv.header[1 + m].rfind("q:", 0) == 0) ++m;
+          const std::size_t rest = csv.header.size() - 1 - m;
+          if (m == 0 || (rest != 0 && rest != m))
+            throw InputError(csv.file +
+                             ":1: expected t, then q:NAME for every joint, then tau:NAME for "
+                             "every joint or no torque columns (got " +
+                             std::to_string(m) + " q: and " + std::to_string(rest) +
+                             " other columns after t)");
+          m_tau = rest;
+          for (std::size_t j = 0; j < m; ++j) {
+            const std::string& qh = csv.header[1 + j];
+            if (qh.size() < 3)
+              throw InputError(csv.file + ":1: column " + std::to_string(2 + j) + " is '" + qh +
+                               "', expected q:NAME");
+            const std::string name = qh.substr(2);
+            if (m_tau > 0) {
+              const std::string& th = csv.header[1 + m + j];
+              if (th != "tau:" + name)
+                throw InputError(csv.file + ":1: column " + std::to_string(2 + m + j) + " is '" +
+                                 th + "', expected 'tau:" + name +
+                                 "' (torques in the order of the positions)");
+            }
+            s.joint_names_.push_back(name);
+          }
         }
-        s.joint_names_.push_back(name);
-      }
-    }
-    s.t_.push_back(joint_time(csv, row));
-    for (std::size_t j = 0; j < m; ++j) q_rows.push_back(ParseNumber(csv, row, 1 + j));
-    for (std::size_t j = 0; j < m_tau; ++j) tau_rows.push_back(ParseNumber(csv, row, 1 + m + j));
-  });
+        s.t_.push_back(joint_time(csv, row));
+        for (std::size_t j = 0; j < m; ++j) q_rows.push_back(ParseNumber(csv, row, 1 + j));
+        for (std::size_t j = 0; j < m_tau; ++j)
+          tau_rows.push_back(ParseNumber(csv, row, 1 + m + j));
+      });
   if (joints.rows == 0) throw InputError(joints.file + ": no samples");
   const long n = joints.rows;
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -310,7 +326,8 @@ Session Session::Load(const std::string& dir) {
     throw InputError(camera_csv.string() + ": missing, but session.json declares a camera");
   if (fs::exists(camera_csv)) {
     if (!info.camera)
-      throw InputError(json_path + ": camera.csv exists but session.json has no \"camera\" intrinsics");
+      throw InputError(json_path +
+                       ": camera.csv exists but session.json has no \"camera\" intrinsics");
     TimeColumn frame_time;
     const Csv cam_file = ReadCsv(camera_csv.string(), [&](const Csv& cam, const CsvRow& row) {
       if (s.frames_.empty()) RequireHeader(cam, WithPoseColumns({"t", "image"}));
@@ -347,9 +364,9 @@ Image8 Session::LoadImage(int i) const {
   Image8 image = ReadImage(path);
   const Intrinsics& K = *info_.camera;
   if (image.width != K.width || image.height != K.height)
-    throw InputError(path + ": image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                     ", session.json's camera says " + std::to_string(K.width) + "x" +
-                     std::to_string(K.height));
+    throw InputError(path + ": image is " + std::to_string(image.width) + "x" +
+                     std::to_string(image.height) + ", session.json's camera says " +
+                     std::to_string(K.width) + "x" + std::to_string(K.height));
   return image;
 }
 
@@ -363,7 +380,8 @@ Transform Session::GroundTruthAt(double t) const {
   const GroundTruthSample& a = *(it - 1);
   const double w = (t - a.t) / (b.t - a.t);
   const Quat qa(a.T_PO.linear()), qb(b.T_PO.linear());
-  return MakeTransform((1.0 - w) * a.T_PO.translation() + w * b.T_PO.translation(), qa.slerp(w, qb));
+  return MakeTransform((1.0 - w) * a.T_PO.translation() + w * b.T_PO.translation(),
+                       qa.slerp(w, qb));
 }
 
 std::vector<int> Session::JointColumns(const HandModel& hand) const {
@@ -383,10 +401,12 @@ std::vector<int> Session::JointColumns(const HandModel& hand) const {
   return column;
 }
 
-std::vector<Session::LimitViolation> Session::LimitViolations(const HandModel& hand, const std::vector<int>& columns) const {
+std::vector<Session::LimitViolation> Session::LimitViolations(
+    const HandModel& hand, const std::vector<int>& columns) const {
   std::vector<LimitViolation> out;
   for (int i = 0; i < hand.num_q(); ++i) {
-    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    const Joint& joint =
+        hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
     if (!joint.has_limits) continue;
     LimitViolation v;
     v.q_index = i;
@@ -396,7 +416,8 @@ std::vector<Session::LimitViolation> Session::LimitViolations(const HandModel& h
     for (Eigen::Index k = 0; k < column.size(); ++k) {
       const double x = column[k];
       if (!std::isfinite(x)) continue;  // the player reports those
-      const double by = x < joint.lower ? joint.lower - x : (x > joint.upper ? x - joint.upper : 0.0);
+      const double by =
+          x < joint.lower ? joint.lower - x : (x > joint.upper ? x - joint.upper : 0.0);
       if (!(by > 0.0)) continue;
       ++(x < joint.lower ? v.below : v.above);
       if (by > worst_by) {
@@ -410,15 +431,21 @@ std::vector<Session::LimitViolation> Session::LimitViolations(const HandModel& h
   return out;
 }
 
-std::vector<std::string> Session::LimitWarnings(const HandModel& hand, const std::vector<int>& columns) const {
+std::vector<std::string> Session::LimitWarnings(const HandModel& hand,
+                                                const std::vector<int>& columns) const {
   std::vector<std::string> out;
   for (const LimitViolation& v : LimitViolations(hand, columns)) {
-    if (std::abs(v.worst - v.limit) <= info_.sigma_joint_bias) continue;  // what the encoders may be off by
+    if (std::abs(v.worst - v.limit) <= info_.sigma_joint_bias)
+      continue;  // what the encoders may be off by
     std::ostringstream line;
     line << Resolve("joints.csv") << ": q:" << v.joint << " beyond its ";
-    if (v.below > 0 && v.above > 0) line << "limits in " << v.below << " (below) and " << v.above << " (above)";
-    else line << (v.below > 0 ? "lower" : "upper") << " limit " << v.limit << " in " << v.below + v.above;
-    line << " of " << num_samples() << " samples (worst " << v.worst << ", by " << std::abs(v.worst - v.limit) << ")";
+    if (v.below > 0 && v.above > 0)
+      line << "limits in " << v.below << " (below) and " << v.above << " (above)";
+    else
+      line << (v.below > 0 ? "lower" : "upper") << " limit " << v.limit << " in "
+           << v.below + v.above;
+    line << " of " << num_samples() << " samples (worst " << v.worst << ", by "
+         << std::abs(v.worst - v.limit) << ")";
     out.push_back(line.str());
   }
   return out;
@@ -437,7 +464,8 @@ SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes)
   options.packages = packages;
   options.load_visual_meshes = load_visual_meshes;
   SessionModels models{LoadHandModel(session.Resolve(session.info().hand_urdf), options),
-                       LoadObjectModel(session.Resolve(session.info().object), packages), {}};
+                       LoadObjectModel(session.Resolve(session.info().object), packages),
+                       {}};
   models.joint_columns = session.JointColumns(models.hand);
   const std::map<std::string, double>& ks = session.info().joint_stiffness;
   if (!ks.empty()) {
@@ -458,9 +486,13 @@ SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes)
 
 // -----------------------------------------------------------------------------------------------
 
-SessionWriter::SessionWriter(std::string dir, SessionInfo info, std::vector<std::string> joint_names,
-                             bool overwrite, bool torques)
-    : dir_(std::move(dir)), info_(std::move(info)), joint_names_(std::move(joint_names)), overwrite_(overwrite), torques_(torques) {
+SessionWriter::SessionWriter(std::string dir, SessionInfo info,
+                             std::vector<std::string> joint_names, bool overwrite, bool torques)
+    : dir_(std::move(dir)),
+      info_(std::move(info)),
+      joint_names_(std::move(joint_names)),
+      overwrite_(overwrite),
+      torques_(torques) {
   if (joint_names_.empty()) throw InputError("session writer: no joints");
   if (fs::exists(fs::absolute(dir_)) && !overwrite_)
     throw InputError(dir_ + ": already exists (pass overwrite to replace it)");
@@ -490,8 +522,10 @@ SessionWriter::~SessionWriter() {
 
 void SessionWriter::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
                                    const Eigen::Ref<const Eigen::VectorXd>& tau) {
-  INHAND_CHECK(q.size() == static_cast<long>(joint_names_.size()) && tau.size() == (torques_ ? q.size() : 0),
-               "joint sample size does not match the joint names (or torques given to a torque-free session)");
+  INHAND_CHECK(
+      q.size() == static_cast<long>(joint_names_.size()) && tau.size() == (torques_ ? q.size() : 0),
+      "joint sample size does not match the joint names (or torques given to a torque-free "
+      "session)");
   INHAND_CHECK(t > last_joint_t_, "joint samples must be added in increasing time");
   last_joint_t_ = t;
   joints_csv_ += FormatDouble(t);
@@ -511,7 +545,8 @@ void SessionWriter::AddCameraFrame(double t, const Image8& image, const Transfor
   camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
 }
 
-void SessionWriter::AdoptCameraFrame(double t, const std::string& file, const std::string& extension, const Vec3& p_PC,
+void SessionWriter::AdoptCameraFrame(double t, const std::string& file,
+                                     const std::string& extension, const Vec3& p_PC,
                                      const Quat& q_PC) {
   INHAND_CHECK(info_.camera.has_value(), "camera frames need camera intrinsics in SessionInfo");
   INHAND_CHECK(extension == "png" || extension == "jpg", "adopted frames are png or jpg");
@@ -539,18 +574,20 @@ void SessionWriter::AddFile(const std::string& relative_path, const std::string&
 
 void SessionWriter::Commit() {
   INHAND_CHECK(!committed_, "session already committed");
-  jsonf::Json doc = {{"format", "inhand-session"},
-                     {"version", kFormatVersion},
-                     {"name", info_.name},
-                     {"hand", {{"urdf", info_.hand_urdf}}},
-                     {"object", {{"model", info_.object}}},
-                     {"conventions", {{"quaternion", "wxyz"}, {"torque", "external"}, {"length", "m"}, {"angle", "rad"}}},
-                     {"initial_estimate",
-                      {{"T_PO", jsonf::PoseToJson(info_.initial_T_PO)},
-                       {"sigma_position", info_.sigma_position},
-                       {"sigma_orientation", info_.sigma_orientation},
-                       {"sigma_joint_bias", info_.sigma_joint_bias}}},
-                     {"provenance", jsonf::Json::parse(info_.provenance_json)}};
+  jsonf::Json doc = {
+      {"format", "inhand-session"},
+      {"version", kFormatVersion},
+      {"name", info_.name},
+      {"hand", {{"urdf", info_.hand_urdf}}},
+      {"object", {{"model", info_.object}}},
+      {"conventions",
+       {{"quaternion", "wxyz"}, {"torque", "external"}, {"length", "m"}, {"angle", "rad"}}},
+      {"initial_estimate",
+       {{"T_PO", jsonf::PoseToJson(info_.initial_T_PO)},
+        {"sigma_position", info_.sigma_position},
+        {"sigma_orientation", info_.sigma_orientation},
+        {"sigma_joint_bias", info_.sigma_joint_bias}}},
+      {"provenance", jsonf::Json::parse(info_.provenance_json)}};
   if (!info_.packages.empty()) doc["hand"]["packages"] = info_.packages;
   if (info_.joint_stiffness.size() == 1 && info_.joint_stiffness.count("*"))
     doc["hand"]["joint_stiffness"] = info_.joint_stiffness.at("*");
@@ -558,9 +595,15 @@ void SessionWriter::Commit() {
     doc["hand"]["joint_stiffness"] = info_.joint_stiffness;
   if (info_.camera) {
     const Intrinsics& K = *info_.camera;
-    doc["camera"] = {{"width", K.width}, {"height", K.height}, {"fx", K.fx}, {"fy", K.fy},
-                     {"cx", K.cx}, {"cy", K.cy},
-                     {"distortion", {K.distortion[0], K.distortion[1], K.distortion[2], K.distortion[3], K.distortion[4]}}};
+    doc["camera"] = {
+        {"width", K.width},
+        {"height", K.height},
+        {"fx", K.fx},
+        {"fy", K.fy},
+        {"cx", K.cx},
+        {"cy", K.cy},
+        {"distortion",
+         {K.distortion[0], K.distortion[1], K.distortion[2], K.distortion[3], K.distortion[4]}}};
   }
   WriteText(fs::path(tmp_) / "session.json", doc.dump(2) + "\n");
   WriteText(fs::path(tmp_) / "joints.csv", joints_csv_);
@@ -568,7 +611,8 @@ void SessionWriter::Commit() {
   if (groundtruth_csv_.find('\n') + 1 < groundtruth_csv_.size())
     WriteText(fs::path(tmp_) / "groundtruth.csv", groundtruth_csv_);
   if (num_frames_ == 0) fs::remove(fs::path(tmp_) / "images");
-  if (fs::exists(final_) && !overwrite_) throw InputError(dir_ + ": appeared while writing; not replaced");
+  if (fs::exists(final_) && !overwrite_)
+    throw InputError(dir_ + ": appeared while writing; not replaced");
   CommitStaging(tmp_, final_, "(session)");
   committed_ = true;
 }

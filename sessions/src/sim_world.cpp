@@ -1,12 +1,12 @@
 #include "sim_world.hpp"
 
-#include <btBulletDynamicsCommon.h>
 #include <BulletDynamics/Featherstone/btMultiBody.h>
 #include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
 #include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
 #include <BulletDynamics/Featherstone/btMultiBodyJointLimitConstraint.h>
 #include <BulletDynamics/Featherstone/btMultiBodyJointMotor.h>
 #include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
+#include <btBulletDynamicsCommon.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -29,7 +29,8 @@ Vec3 ZxyAngles(const Mat3& R) {
 }
 Mat3 ZxyRotation(const Vec3& abc) {
   return (Eigen::AngleAxisd(abc[0], Vec3::UnitZ()) * Eigen::AngleAxisd(abc[1], Vec3::UnitX()) *
-          Eigen::AngleAxisd(abc[2], Vec3::UnitY())).toRotationMatrix();
+          Eigen::AngleAxisd(abc[2], Vec3::UnitY()))
+      .toRotationMatrix();
 }
 
 btVector3 Bt(const Vec3& v) { return btVector3(v.x(), v.y(), v.z()); }
@@ -45,12 +46,17 @@ Transform Ei(const btTransform& T) {
 }
 
 // A convex piece as a Bullet child shape and its transform in the body frame.
-std::pair<btCollisionShape*, btTransform> MakeChild(const ConvexPiece& p, const Transform& T_body_frame_inv) {
+std::pair<btCollisionShape*, btTransform> MakeChild(const ConvexPiece& p,
+                                                    const Transform& T_body_frame_inv) {
   btCollisionShape* shape = nullptr;
   Transform T = T_body_frame_inv * p.T_BS;
   switch (p.kind) {
-    case ConvexPiece::Kind::kSphere: shape = new btSphereShape(p.radius); break;
-    case ConvexPiece::Kind::kCapsule: shape = new btCapsuleShapeZ(p.radius, 2.0 * p.half_length); break;
+    case ConvexPiece::Kind::kSphere:
+      shape = new btSphereShape(p.radius);
+      break;
+    case ConvexPiece::Kind::kCapsule:
+      shape = new btCapsuleShapeZ(p.radius, 2.0 * p.half_length);
+      break;
     case ConvexPiece::Kind::kCylinder: {
       auto* c = new btCylinderShapeZ(btVector3(p.radius, p.radius, p.half_length));
       c->setMargin(kMargin);
@@ -73,7 +79,8 @@ std::pair<btCollisionShape*, btTransform> MakeChild(const ConvexPiece& p, const 
       for (const Vec3& v : p.hull_vertices) {
         const Vec3 local = T_body_frame_inv * v;
         const double len = (local - cl).norm();
-        h->addPoint(Bt(len > kMargin ? Vec3(cl + (local - cl) * (1.0 - kMargin / len)) : local), false);
+        h->addPoint(Bt(len > kMargin ? Vec3(cl + (local - cl) * (1.0 - kMargin / len)) : local),
+                    false);
       }
       h->recalcLocalAabb();
       h->setMargin(kMargin);
@@ -109,16 +116,17 @@ struct World::Impl {
   std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
   std::vector<std::unique_ptr<btMultiBodyJointMotor>> motors;  // arm first, then hand q order
   std::vector<std::unique_ptr<btMultiBodyJointLimitConstraint>> limits;
-  std::vector<int> q_link;      // multibody link of each hand q entry
-  std::vector<int> link_of;     // multibody link of each hand link (-1: the palm is link 5)
+  std::vector<int> q_link;   // multibody link of each hand q entry
+  std::vector<int> link_of;  // multibody link of each hand link (-1: the palm is link 5)
   Transform T_OB = Transform::Identity();
   Vec3 last_rpy = Vec3::Zero();  // last arm rotation angles, for unwrapping
   explicit Impl(const HandModel& h) : hand(h) {}
 };
 
-World::World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
-             const Transform& T_WP0, const Eigen::VectorXd& q0, const std::vector<std::pair<Transform, Vec3>>& props,
-             double pad_stiffness, double pad_damping)
+World::World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO,
+             double friction_links, const Transform& T_WP0, const Eigen::VectorXd& q0,
+             const std::vector<std::pair<Transform, Vec3>>& props, double pad_stiffness,
+             double pad_damping)
     : impl_(std::make_unique<Impl>(hand)) {
   Impl& w = *impl_;
   w.world.setGravity(btVector3(0, 0, -9.81));
@@ -132,8 +140,10 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   auto* table_shape = new btBoxShape(btVector3(0.6, 0.4, 0.025));
   table_shape->setMargin(kMargin);
   w.shapes.emplace_back(table_shape);
-  w.table_state = std::make_unique<btDefaultMotionState>(btTransform(btQuaternion::getIdentity(), btVector3(0, 0, -0.025)));
-  w.table = std::make_unique<btRigidBody>(btRigidBody::btRigidBodyConstructionInfo(0.0, w.table_state.get(), table_shape));
+  w.table_state = std::make_unique<btDefaultMotionState>(
+      btTransform(btQuaternion::getIdentity(), btVector3(0, 0, -0.025)));
+  w.table = std::make_unique<btRigidBody>(
+      btRigidBody::btRigidBodyConstructionInfo(0.0, w.table_state.get(), table_shape));
   w.table->setFriction(0.5);
   w.table->setUserIndex(-2);
   w.world.addRigidBody(w.table.get());
@@ -143,7 +153,8 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
     box->setMargin(kMargin);
     w.shapes.emplace_back(box);
     w.prop_states.push_back(std::make_unique<btDefaultMotionState>(Bt(T)));
-    w.props.push_back(std::make_unique<btRigidBody>(btRigidBody::btRigidBodyConstructionInfo(0.0, w.prop_states.back().get(), box)));
+    w.props.push_back(std::make_unique<btRigidBody>(
+        btRigidBody::btRigidBodyConstructionInfo(0.0, w.prop_states.back().get(), box)));
     w.props.back()->setFriction(0.6);
     w.props.back()->setUserIndex(-2);
     w.world.addRigidBody(w.props.back().get());
@@ -168,7 +179,8 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   w.object->setRollingFriction(0.001);
   w.object->setSpinningFriction(0.001);
   w.object->setActivationState(DISABLE_DEACTIVATION);
-  w.object->setCcdMotionThreshold(0.002);  // thin objects (the pen) must not tunnel through the table
+  w.object->setCcdMotionThreshold(
+      0.002);  // thin objects (the pen) must not tunnel through the table
   w.object->setCcdSweptSphereRadius(0.002);
   w.object->setUserIndex(-1);
   w.world.addRigidBody(w.object.get());
@@ -185,7 +197,8 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   w.mb->setupPrismatic(2, 2.0, small, 1, id, btVector3(0, 0, 1), zero, zero, true);
   w.mb->setupRevolute(3, 1.0, small, 2, id, btVector3(0, 0, 1), zero, zero, true);
   w.mb->setupRevolute(4, 1.0, small, 3, id, btVector3(1, 0, 0), zero, zero, true);
-  w.mb->setupRevolute(5, 0.5, Bt(Vec3(4e-4, 4e-4, 6e-4)), 4, id, btVector3(0, 1, 0), zero, zero, true);
+  w.mb->setupRevolute(5, 0.5, Bt(Vec3(4e-4, 4e-4, 6e-4)), 4, id, btVector3(0, 1, 0), zero, zero,
+                      true);
   w.link_of.assign(hand.links.size(), -1);
   w.link_of[static_cast<std::size_t>(hand.root_link)] = 5;
   int next = kArmDofs;
@@ -199,9 +212,11 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
     if (joint.type == JointType::kFixed) {
       w.mb->setupFixed(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, offset, zero, true);
     } else if (joint.type == JointType::kPrismatic) {
-      w.mb->setupPrismatic(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, Bt(joint.axis), offset, zero, true);
+      w.mb->setupPrismatic(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, Bt(joint.axis),
+                           offset, zero, true);
     } else {
-      w.mb->setupRevolute(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, Bt(joint.axis), offset, zero, true);
+      w.mb->setupRevolute(link, mass, Bt(Vec3::Constant(2e-6)), parent, rot, Bt(joint.axis), offset,
+                          zero, true);
     }
   }
   w.mb->finalizeMultiDof();
@@ -222,10 +237,13 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
     collider->setCollisionShape(c);
     collider->setFriction(friction_links);
     collider->setUserIndex(static_cast<int>(l));
-    const bool fingertip = std::none_of(hand.joints.begin(), hand.joints.end(),
-                                        [&](const Joint& j) { return j.parent_link == static_cast<int>(l) && j.moves(); });
-    if (pad_stiffness > 0 && fingertip) collider->setContactStiffnessAndDamping(pad_stiffness, pad_damping);
-    w.world.addCollisionObject(collider.get(), btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter);
+    const bool fingertip = std::none_of(
+        hand.joints.begin(), hand.joints.end(),
+        [&](const Joint& j) { return j.parent_link == static_cast<int>(l) && j.moves(); });
+    if (pad_stiffness > 0 && fingertip)
+      collider->setContactStiffnessAndDamping(pad_stiffness, pad_damping);
+    w.world.addCollisionObject(collider.get(), btBroadphaseProxy::DefaultFilter,
+                               btBroadphaseProxy::AllFilter);
     w.mb->getLink(link).m_collider = collider.get();
     w.colliders.push_back(std::move(collider));
   }
@@ -250,14 +268,19 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
     w.motors.back()->setErp(1.0);
     w.world.addMultiBodyConstraint(w.motors.back().get());
   }
-  for (int j : hand.q_joints) w.q_link.push_back(w.link_of[static_cast<std::size_t>(hand.joints[static_cast<std::size_t>(j)].child_link)]);
+  for (int j : hand.q_joints)
+    w.q_link.push_back(
+        w.link_of[static_cast<std::size_t>(hand.joints[static_cast<std::size_t>(j)].child_link)]);
   for (int i = 0; i < hand.num_q(); ++i) {
-    const Joint& joint = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
-    w.motors.push_back(std::make_unique<btMultiBodyJointMotor>(w.mb.get(), w.q_link[static_cast<std::size_t>(i)], 0.0, 0.001));
+    const Joint& joint =
+        hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    w.motors.push_back(std::make_unique<btMultiBodyJointMotor>(
+        w.mb.get(), w.q_link[static_cast<std::size_t>(i)], 0.0, 0.001));
     w.motors.back()->setErp(1.0);
     w.world.addMultiBodyConstraint(w.motors.back().get());
     if (joint.has_limits) {
-      w.limits.push_back(std::make_unique<btMultiBodyJointLimitConstraint>(w.mb.get(), w.q_link[static_cast<std::size_t>(i)], joint.lower, joint.upper));
+      w.limits.push_back(std::make_unique<btMultiBodyJointLimitConstraint>(
+          w.mb.get(), w.q_link[static_cast<std::size_t>(i)], joint.lower, joint.upper));
       w.world.addMultiBodyConstraint(w.limits.back().get());
     }
   }
@@ -265,9 +288,15 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
   // Initial state.
   const Vec3 abc = ZxyAngles(T_WP0.linear());
   w.last_rpy = abc;
-  const double arm[kArmDofs] = {T_WP0.translation().x(), T_WP0.translation().y(), T_WP0.translation().z(), abc[0], abc[1], abc[2]};
+  const double arm[kArmDofs] = {T_WP0.translation().x(),
+                                T_WP0.translation().y(),
+                                T_WP0.translation().z(),
+                                abc[0],
+                                abc[1],
+                                abc[2]};
   for (int i = 0; i < kArmDofs; ++i) w.mb->setJointPos(i, arm[i]);
-  for (int i = 0; i < hand.num_q(); ++i) w.mb->setJointPos(w.q_link[static_cast<std::size_t>(i)], q0[i]);
+  for (int i = 0; i < hand.num_q(); ++i)
+    w.mb->setJointPos(w.q_link[static_cast<std::size_t>(i)], q0[i]);
   btAlignedObjectArray<btQuaternion> scratch_q;
   btAlignedObjectArray<btVector3> scratch_m;
   w.mb->forwardKinematics(scratch_q, scratch_m);
@@ -286,12 +315,18 @@ World::~World() {
   for (auto& p : w.props) w.world.removeRigidBody(p.get());
 }
 
-void World::SetTargets(const Transform& T_WP, const Eigen::VectorXd& q_target, const Eigen::VectorXd& tau_max) {
+void World::SetTargets(const Transform& T_WP, const Eigen::VectorXd& q_target,
+                       const Eigen::VectorXd& tau_max) {
   Impl& w = *impl_;
   Vec3 abc = ZxyAngles(T_WP.linear());
   for (int k = 0; k < 3; ++k) abc[k] = Unwrap(abc[k], w.last_rpy[k]);
   w.last_rpy = abc;
-  const double arm[kArmDofs] = {T_WP.translation().x(), T_WP.translation().y(), T_WP.translation().z(), abc[0], abc[1], abc[2]};
+  const double arm[kArmDofs] = {T_WP.translation().x(),
+                                T_WP.translation().y(),
+                                T_WP.translation().z(),
+                                abc[0],
+                                abc[1],
+                                abc[2]};
   for (int i = 0; i < kArmDofs; ++i) {
     w.motors[static_cast<std::size_t>(i)]->setPositionTarget(arm[i], 0.5);
     w.motors[static_cast<std::size_t>(i)]->setVelocityTarget(0.0, 0.5);
@@ -344,14 +379,16 @@ void World::Step(double dt) {
 
 Eigen::VectorXd World::JointPositions() const {
   Eigen::VectorXd q(impl_->hand.num_q());
-  for (int i = 0; i < q.size(); ++i) q[i] = impl_->mb->getJointPos(impl_->q_link[static_cast<std::size_t>(i)]);
+  for (int i = 0; i < q.size(); ++i)
+    q[i] = impl_->mb->getJointPos(impl_->q_link[static_cast<std::size_t>(i)]);
   return q;
 }
 
 Transform World::PalmPose() const {
   const btMultiBody& mb = *impl_->mb;
   const Vec3 p(mb.getJointPos(0), mb.getJointPos(1), mb.getJointPos(2));
-  return MakeTransform(p, ZxyRotation(Vec3(mb.getJointPos(3), mb.getJointPos(4), mb.getJointPos(5))));
+  return MakeTransform(p,
+                       ZxyRotation(Vec3(mb.getJointPos(3), mb.getJointPos(4), mb.getJointPos(5))));
 }
 
 Transform World::ObjectPose() const {

@@ -16,9 +16,9 @@ constexpr double kLinkMass = 0.02;  // [kg] of every hand link in the simulation
 
 struct LinkContact {
   int link = -1;
-  Vec3 point_W = Vec3::Zero();   // on the link
-  Vec3 force_W = Vec3::Zero();   // applied by the link to the object [N]
-  double distance = 0.0;         // Bullet's (with margins)
+  Vec3 point_W = Vec3::Zero();  // on the link
+  Vec3 force_W = Vec3::Zero();  // applied by the link to the object [N]
+  double distance = 0.0;        // Bullet's (with margins)
 };
 
 class World {
@@ -26,8 +26,8 @@ class World {
   // `props`: static boxes (pose, half extents) on the table. `pad_stiffness` > 0: the fingertip
   // links (those without moving child joints) touch through a compliant pad of that stiffness [N/m]
   // and damping [N s/m] instead of rigidly.
-  World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO, double friction_links,
-        const Transform& T_WP0, const Eigen::VectorXd& q0,
+  World(const HandModel& hand, const ObjectModel& object, const Transform& T_WO,
+        double friction_links, const Transform& T_WP0, const Eigen::VectorXd& q0,
         const std::vector<std::pair<Transform, Vec3>>& props = {}, double pad_stiffness = 0.0,
         double pad_damping = 0.0);
   ~World();
@@ -36,11 +36,12 @@ class World {
 
   // Motor targets for the next step: palm pose (reached stiffly) and hand joints (reached
   // within the torque limits).
-  void SetTargets(const Transform& T_WP, const Eigen::VectorXd& q_target, const Eigen::VectorXd& tau_max);
+  void SetTargets(const Transform& T_WP, const Eigen::VectorXd& q_target,
+                  const Eigen::VectorXd& tau_max);
   void Step(double dt);
   Eigen::VectorXd JointPositions() const;  // hand joints, model order
   Transform PalmPose() const;              // T_WP as simulated
-  Transform ObjectPose() const;  // T_WO
+  Transform ObjectPose() const;            // T_WO
   Vec3 ObjectLinearVelocity() const;
   // Contacts between links and the object after the last step, with the forces the links
   // applied to the object (normal and friction impulses over dt).

@@ -19,9 +19,9 @@
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
 #include "inhand/renderer/views.hpp"
-#include "inhand/sessions/session.hpp"
 #include "inhand/sessions/camera_sim.hpp"
 #include "inhand/sessions/output_folder.hpp"
+#include "inhand/sessions/session.hpp"
 #include "scenarios.hpp"
 #include "sim_world.hpp"
 
@@ -34,15 +34,20 @@ NoiseProfile ParseNoiseProfile(const std::string& name) {
   if (name == "paper") return NoiseProfile::kPaper;
   if (name == "hard") return NoiseProfile::kHard;
   if (name == "realistic") return NoiseProfile::kRealistic;
-  throw InputError("noise profile '" + name + "' is unknown, expected none, paper, hard or realistic");
+  throw InputError("noise profile '" + name +
+                   "' is unknown, expected none, paper, hard or realistic");
 }
 
 const char* NoiseProfileName(NoiseProfile p) {
   switch (p) {
-    case NoiseProfile::kNone: return "none";
-    case NoiseProfile::kPaper: return "paper";
-    case NoiseProfile::kHard: return "hard";
-    case NoiseProfile::kRealistic: return "realistic";
+    case NoiseProfile::kNone:
+      return "none";
+    case NoiseProfile::kPaper:
+      return "paper";
+    case NoiseProfile::kHard:
+      return "hard";
+    case NoiseProfile::kRealistic:
+      return "realistic";
   }
   return "?";
 }
@@ -58,18 +63,18 @@ namespace {
 struct Noise {
   // Magnitudes of the initial estimate's error: a start from the tracking system (its error and
   // the markers' registration), and a start set by hand or purposely off (Scenario::Start).
-  double tracked_position = 0.0;     // [m]
-  double tracked_orientation = 0.0;  // [rad]
-  double initial_position = 0.0;     // [m]
-  double initial_orientation = 0.0;  // [rad]
-  double bias_sigma = 0.0;           // [rad] constant joint biases ~ N(0, σ)
-  double joint_sigma = 0.0;          // [rad] white noise per sample
-  double torque_sigma = 0.0;         // [N m]
-  double hand_eye_position = 0.0;    // [m] constant error of the recorded T_PC
-  double hand_eye_orientation = 0.0; // [rad]
-  double pixel_sigma = 0.0;          // [grey levels]
-  double blur_sigma = 0.0;           // [px]
-  int occluders = 0;                 // extra objects between camera and hand
+  double tracked_position = 0.0;      // [m]
+  double tracked_orientation = 0.0;   // [rad]
+  double initial_position = 0.0;      // [m]
+  double initial_orientation = 0.0;   // [rad]
+  double bias_sigma = 0.0;            // [rad] constant joint biases ~ N(0, σ)
+  double joint_sigma = 0.0;           // [rad] white noise per sample
+  double torque_sigma = 0.0;          // [N m]
+  double hand_eye_position = 0.0;     // [m] constant error of the recorded T_PC
+  double hand_eye_orientation = 0.0;  // [rad]
+  double pixel_sigma = 0.0;           // [grey levels]
+  double blur_sigma = 0.0;            // [px]
+  int occluders = 0;                  // extra objects between camera and hand
 };
 
 Noise NoiseFor(NoiseProfile p) {
@@ -105,9 +110,12 @@ Noise NoiseFor(NoiseProfile p) {
 
 const char* StartName(sim::Scenario::Start start) {
   switch (start) {
-    case sim::Scenario::Start::kTracked: return "tracked";
-    case sim::Scenario::Start::kTooHigh: return "too_high";
-    case sim::Scenario::Start::kByHand: return "by_hand";
+    case sim::Scenario::Start::kTracked:
+      return "tracked";
+    case sim::Scenario::Start::kTooHigh:
+      return "too_high";
+    case sim::Scenario::Start::kByHand:
+      return "by_hand";
   }
   return "?";
 }
@@ -116,9 +124,12 @@ const char* StartName(sim::Scenario::Start start) {
 // position is off by the hand-set amount straight up and the orientation still by the tracker's.
 std::pair<double, double> StartError(const Noise& n, sim::Scenario::Start start) {
   switch (start) {
-    case sim::Scenario::Start::kTracked: return {n.tracked_position, n.tracked_orientation};
-    case sim::Scenario::Start::kTooHigh: return {n.initial_position, n.tracked_orientation};
-    case sim::Scenario::Start::kByHand: return {n.initial_position, n.initial_orientation};
+    case sim::Scenario::Start::kTracked:
+      return {n.tracked_position, n.tracked_orientation};
+    case sim::Scenario::Start::kTooHigh:
+      return {n.initial_position, n.tracked_orientation};
+    case sim::Scenario::Start::kByHand:
+      return {n.initial_position, n.initial_orientation};
   }
   return {0.0, 0.0};
 }
@@ -141,14 +152,16 @@ void CopyFolder(SessionWriter& w, const fs::path& from, const std::string& to) {
   for (const auto& e : fs::recursive_directory_iterator(from))
     if (e.is_regular_file()) files.push_back(e.path());
   std::sort(files.begin(), files.end());
-  for (const fs::path& f : files) w.AddFile(to + "/" + fs::relative(f, from).string(), ReadBinary(f));
+  for (const fs::path& f : files)
+    w.AddFile(to + "/" + fs::relative(f, from).string(), ReadBinary(f));
 }
 
 // A flat textured rectangle (table top, backdrop) with a procedural pattern.
 TriangleMesh TexturedBox(const Vec3& half, const cv::Mat& texture_bgr) {
   TriangleMesh m = ConvexPiece::Box(half, Transform::Identity()).ToMesh();
   m.uvs.clear();
-  for (const Vec3& v : m.vertices) m.uvs.emplace_back(0.5 + 0.5 * v.x() / half.x(), 0.5 + 0.5 * v.y() / half.y());
+  for (const Vec3& v : m.vertices)
+    m.uvs.emplace_back(0.5 + 0.5 * v.x() / half.x(), 0.5 + 0.5 * v.y() / half.y());
   std::vector<std::uint8_t> png;
   cv::imencode(".png", texture_bgr, png);
   m.material.texture_blob = png;
@@ -160,9 +173,11 @@ cv::Mat WoodTexture() {
   cv::Mat t(256, 256, CV_8UC3);
   for (int y = 0; y < t.rows; ++y)
     for (int x = 0; x < t.cols; ++x) {
-      const double g = 0.5 + 0.5 * std::sin(0.09 * x + 2.5 * std::sin(0.021 * y) + 0.7 * std::sin(0.13 * y));
-      t.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<std::uint8_t>(70 + 25 * g), static_cast<std::uint8_t>(110 + 30 * g),
-                                        static_cast<std::uint8_t>(150 + 35 * g));
+      const double g =
+          0.5 + 0.5 * std::sin(0.09 * x + 2.5 * std::sin(0.021 * y) + 0.7 * std::sin(0.13 * y));
+      t.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<std::uint8_t>(70 + 25 * g), static_cast<std::uint8_t>(110 + 30 * g),
+                    static_cast<std::uint8_t>(150 + 35 * g));
     }
   return t;
 }
@@ -171,7 +186,8 @@ cv::Mat ClutterTexture(std::mt19937& rng) {
   cv::Mat t(512, 512, CV_8UC3, cv::Scalar(200, 205, 210));
   std::uniform_int_distribution<int> pos(0, 511), size(20, 140), colour(30, 240);
   for (int i = 0; i < 60; ++i)
-    cv::rectangle(t, cv::Rect(pos(rng), pos(rng), size(rng), size(rng)), cv::Scalar(colour(rng), colour(rng), colour(rng)), cv::FILLED);
+    cv::rectangle(t, cv::Rect(pos(rng), pos(rng), size(rng), size(rng)),
+                  cv::Scalar(colour(rng), colour(rng), colour(rng)), cv::FILLED);
   return t;
 }
 
@@ -189,8 +205,9 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     for (const auto& s : sim::Scenarios()) names += (names.empty() ? "" : ", ") + s.name;
     throw InputError("unknown scenario '" + opt.scenario + "', expected one of: " + names);
   }
-  if (!(opt.physics_rate >= 500.0) || !(opt.joint_rate > 0.0) || opt.joint_rate > opt.physics_rate ||
-      !(opt.camera_rate > 0.0) || opt.camera_rate > opt.joint_rate)
+  if (!(opt.physics_rate >= 500.0) || !(opt.joint_rate > 0.0) ||
+      opt.joint_rate > opt.physics_rate || !(opt.camera_rate > 0.0) ||
+      opt.camera_rate > opt.joint_rate)
     throw InputError("simulation rates must satisfy physics >= 500 Hz >= joints >= camera > 0");
   if (opt.image_width < 16 || opt.image_height < 16 || opt.image_width % 2 || opt.image_height % 2)
     throw InputError("image size must be even and at least 16x16");
@@ -235,7 +252,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   // The estimator's model is simplified, the world keeps the detailed one.
   std::optional<SimplifiedModel> simplified;
   if (effects.Has(Effect::kObjectMesh))
-    simplified = SimplifyModel(model_object, ReadBinary(object_dir / "object.json"), object_dir.string(), rp);
+    simplified = SimplifyModel(model_object, ReadBinary(object_dir / "object.json"),
+                               object_dir.string(), rp);
   std::vector<Vec3> joint_origin_offsets;
   HandModel hand = model_hand;
   if (effects.Has(Effect::kHandGeometry)) {
@@ -248,7 +266,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   if (effects.Has(Effect::kHandDeflection)) {
     std::mt19937 r = effect_rng(Effect::kHandDeflection);
     std::normal_distribution<double> g(0.0, 1.0);  // its own: no value cached from another stream
-    for (int j = 0; j < m; ++j) stiffness[j] = rp.joint_stiffness * std::exp(rp.joint_stiffness_sigma * g(r));
+    for (int j = 0; j < m; ++j)
+      stiffness[j] = rp.joint_stiffness * std::exp(rp.joint_stiffness_sigma * g(r));
   }
   std::mt19937 torque_rng = effect_rng(Effect::kTorqueDrift);
   TorqueErrors torque_errors(m, rp, effects, torque_rng);
@@ -257,14 +276,17 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   // Constant errors of this session: joint biases, hand-eye calibration, initial estimate.
   Eigen::VectorXd bias(m);
   for (int j = 0; j < m; ++j) bias[j] = noise.bias_sigma * gauss(rng);
-  const Transform hand_eye_error = MakeTransform(noise.hand_eye_position * RandomUnit(rng),
-                                                 ExpSO3(noise.hand_eye_orientation * RandomUnit(rng)));
+  const Transform hand_eye_error =
+      MakeTransform(noise.hand_eye_position * RandomUnit(rng),
+                    ExpSO3(noise.hand_eye_orientation * RandomUnit(rng)));
 
   const double dt = 1.0 / opt.physics_rate;
   const double duration = scenario->duration() * opt.duration_scale;
   const int steps = static_cast<int>(std::lround(duration / dt));
-  const int joint_every = std::max(1, static_cast<int>(std::lround(opt.physics_rate / opt.joint_rate)));
-  const int camera_every = std::max(1, static_cast<int>(std::lround(opt.physics_rate / opt.camera_rate)));
+  const int joint_every =
+      std::max(1, static_cast<int>(std::lround(opt.physics_rate / opt.joint_rate)));
+  const int camera_every =
+      std::max(1, static_cast<int>(std::lround(opt.physics_rate / opt.camera_rate)));
 
   // Joint state from the first targets.
   Eigen::VectorXd q(m), tau_filtered = Eigen::VectorXd::Zero(m), tau_contact(m);
@@ -280,12 +302,14 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   std::vector<Transform> T_WL(hand.links.size());
   const auto place_links = [&](const Transform& T_WP) {
     kin.Update(hand, q);
-    for (std::size_t l = 0; l < hand.links.size(); ++l) T_WL[l] = T_WP * kin.T_PL(static_cast<int>(l));
+    for (std::size_t l = 0; l < hand.links.size(); ++l)
+      T_WL[l] = T_WP * kin.T_PL(static_cast<int>(l));
   };
   const Transform T_WO0 = scenario->T_WO;
   std::vector<std::pair<Transform, Vec3>> props;
   for (const sim::Scenario::Prop& p : scenario->props) props.emplace_back(p.T_W, p.half_extents);
-  sim::World world(hand, object, T_WO0, 1.5, sim::PalmAt(*scenario, 0.0), q, props,  // rubber-like fingers
+  sim::World world(hand, object, T_WO0, 1.5, sim::PalmAt(*scenario, 0.0), q,
+                   props,  // rubber-like fingers
                    effects.Has(Effect::kHandPads) ? rp.pad_stiffness : 0.0, rp.pad_damping);
   place_links(sim::PalmAt(*scenario, 0.0));
 
@@ -328,33 +352,50 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     world_scene.T_PC = T_WC;
     world_scene.background = Vec3(0.55, 0.58, 0.62);
     const int table = renderer->AddMesh(TexturedBox(Vec3(0.6, 0.4, 0.025), WoodTexture()));
-    world_scene.items.push_back({table, MakeTransform(Vec3(0, 0, -0.025), Mat3::Identity()), kExtraLabelBase, std::nullopt, 1.0, false});
-    const int wall = renderer->AddMesh(TexturedBox(Vec3(0.8, 0.5, 0.01), ClutterTexture(clutter_rng)));
-    world_scene.items.push_back({wall, MakeTransform(Vec3(-0.1, 0.45, 0.3), ExpSO3(Vec3(M_PI / 2, 0, 0))), kExtraLabelBase + 1, std::nullopt, 1.0, false});
+    world_scene.items.push_back({table, MakeTransform(Vec3(0, 0, -0.025), Mat3::Identity()),
+                                 kExtraLabelBase, std::nullopt, 1.0, false});
+    const int wall =
+        renderer->AddMesh(TexturedBox(Vec3(0.8, 0.5, 0.01), ClutterTexture(clutter_rng)));
+    world_scene.items.push_back({wall,
+                                 MakeTransform(Vec3(-0.1, 0.45, 0.3), ExpSO3(Vec3(M_PI / 2, 0, 0))),
+                                 kExtraLabelBase + 1, std::nullopt, 1.0, false});
     for (const sim::Scenario::Prop& p : scenario->props) {
       TriangleMesh mesh = ConvexPiece::Box(p.half_extents, Transform::Identity()).ToMesh();
       mesh.material.rgba = p.rgba;
-      world_scene.items.push_back({renderer->AddMesh(mesh), p.T_W, static_cast<std::uint16_t>(kExtraLabelBase + 50), std::nullopt, 1.0, false});
+      world_scene.items.push_back({renderer->AddMesh(mesh), p.T_W,
+                                   static_cast<std::uint16_t>(kExtraLabelBase + 50), std::nullopt,
+                                   1.0, false});
     }
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int i = 0; i < 6 + noise.occluders; ++i) {
       const bool occluder = i >= 6;
-      TriangleMesh mesh = i % 2 ? ConvexPiece::Cylinder(0.02 + 0.03 * u(clutter_rng), 0.03 + 0.05 * u(clutter_rng), Transform::Identity()).ToMesh()
-                                : ConvexPiece::Box(Vec3(0.02 + 0.04 * u(clutter_rng), 0.02 + 0.04 * u(clutter_rng), 0.03 + 0.04 * u(clutter_rng)), Transform::Identity()).ToMesh();
-      mesh.material.rgba = Eigen::Vector4d(0.2 + 0.7 * u(clutter_rng), 0.2 + 0.7 * u(clutter_rng), 0.2 + 0.7 * u(clutter_rng), 1.0);
+      TriangleMesh mesh =
+          i % 2 ? ConvexPiece::Cylinder(0.02 + 0.03 * u(clutter_rng), 0.03 + 0.05 * u(clutter_rng),
+                                        Transform::Identity())
+                      .ToMesh()
+                : ConvexPiece::Box(Vec3(0.02 + 0.04 * u(clutter_rng), 0.02 + 0.04 * u(clutter_rng),
+                                        0.03 + 0.04 * u(clutter_rng)),
+                                   Transform::Identity())
+                      .ToMesh();
+      mesh.material.rgba = Eigen::Vector4d(0.2 + 0.7 * u(clutter_rng), 0.2 + 0.7 * u(clutter_rng),
+                                           0.2 + 0.7 * u(clutter_rng), 1.0);
       const int id = renderer->AddMesh(mesh);
       const double h = mesh.Bounds().Size().z() / 2;
       Vec3 where;
       if (occluder) {  // between the camera and the grasp, low in the view
-        where = scenario->camera_target + (scenario->camera_eye - scenario->camera_target) * (0.35 + 0.1 * i / 8.0);
+        where = scenario->camera_target +
+                (scenario->camera_eye - scenario->camera_target) * (0.35 + 0.1 * i / 8.0);
         where.x() += (i % 2 ? 0.05 : -0.05);
         where.z() = h;
       } else {
         const double a = -0.6 + 1.3 * i / 6.0;
-        where = Vec3(-0.25 + 0.45 * std::cos(a) * 0.0 + 0.22 * std::sin(a * 3.0) - 0.1, 0.25 + 0.06 * std::cos(a * 2.0), h);
+        where = Vec3(-0.25 + 0.45 * std::cos(a) * 0.0 + 0.22 * std::sin(a * 3.0) - 0.1,
+                     0.25 + 0.06 * std::cos(a * 2.0), h);
         where.x() = -0.35 + 0.14 * i;
       }
-      world_scene.items.push_back({id, MakeTransform(where, ExpSO3(Vec3(0, 0, 0.4 * i))), static_cast<std::uint16_t>(kExtraLabelBase + 2 + i), std::nullopt, 1.0, false});
+      world_scene.items.push_back({id, MakeTransform(where, ExpSO3(Vec3(0, 0, 0.4 * i))),
+                                   static_cast<std::uint16_t>(kExtraLabelBase + 2 + i),
+                                   std::nullopt, 1.0, false});
     }
   }
   std::unique_ptr<CameraSimulator> camera;
@@ -362,15 +403,19 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   if (camera_sim) {
     light.lamp = scenario->camera_target + Vec3(0.45, -0.35, 0.85);
     light.lamp_target = scenario->camera_target;
-    camera = std::make_unique<CameraSimulator>(*renderer, K_lens, rp, effects, light, opt.seed * 31337u + 5u);
+    camera = std::make_unique<CameraSimulator>(*renderer, K_lens, rp, effects, light,
+                                               opt.seed * 31337u + 5u);
   }
   // The world over the last exposure (motion blur): link poses and object pose per physics step.
-  const int exposure_steps = effects.Has(Effect::kCameraMotionBlur) ? std::max(0, static_cast<int>(std::lround(rp.exposure_time / dt))) : 0;
+  const int exposure_steps = effects.Has(Effect::kCameraMotionBlur)
+                                 ? std::max(0, static_cast<int>(std::lround(rp.exposure_time / dt)))
+                                 : 0;
   std::deque<std::pair<std::vector<Transform>, Transform>> recent;
 
   // Session metadata.
   SessionInfo info;
-  info.name = scenario->name + "-seed" + std::to_string(opt.seed) + "-" + NoiseProfileName(opt.noise);
+  info.name =
+      scenario->name + "-seed" + std::to_string(opt.seed) + "-" + NoiseProfileName(opt.noise);
   info.hand_urdf = "model/hand/inhand_hand.urdf";
   info.object = "model/object/object.json";
   if (opt.images) info.camera = K_session;
@@ -437,8 +482,9 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   std::unique_ptr<SessionWriter> writer;
   const auto start_recording = [&](const Transform& T_WP_now, const Transform& T_PO_now) {
     T_PO0 = T_PO_now;
-    const Vec3 dir = scenario->start == sim::Scenario::Start::kTooHigh ? Vec3(T_WP_now.linear().transpose() * Vec3::UnitZ())
-                                                                  : error_dir_random;
+    const Vec3 dir = scenario->start == sim::Scenario::Start::kTooHigh
+                         ? Vec3(T_WP_now.linear().transpose() * Vec3::UnitZ())
+                         : error_dir_random;
     info.initial_T_PO = MakeTransform(T_PO0.translation() + start_error.first * dir,
                                       ExpSO3(start_error.second * error_axis) * T_PO0.linear());
     provenance["record_start"] = record_start;
@@ -447,7 +493,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     CopyFolder(*writer, hand_dir, "model/hand");
     CopyFolder(*writer, object_dir, "model/object");
     if (simplified)
-      for (const auto& [name, contents] : simplified->files) writer->AddFile("model/object/" + name, contents);
+      for (const auto& [name, contents] : simplified->files)
+        writer->AddFile("model/object/" + name, contents);
   };
 
   // Truth for diagnostics and the plausibility checks.
@@ -502,11 +549,13 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       const Vec3 g_P = T_PW.linear() * Vec3(0, 0, -9.81 * sim::kLinkMass);
       for (std::size_t l = 0; l < hand.links.size(); ++l) {
         if (static_cast<int>(l) == hand.root_link) continue;
-        PointJacobian(hand, kin, static_cast<int>(l), kin.T_PL(static_cast<int>(l)).translation(), J);
+        PointJacobian(hand, kin, static_cast<int>(l), kin.T_PL(static_cast<int>(l)).translation(),
+                      J);
         tau_gravity -= J.transpose() * g_P;  // what the motors hold against gravity
       }
     }
-    const Eigen::VectorXd tau_estimate = torque_errors.Step(dt, tau_filtered, (q - q_prev) / dt, tau_gravity);
+    const Eigen::VectorXd tau_estimate =
+        torque_errors.Step(dt, tau_filtered, (q - q_prev) / dt, tau_gravity);
     q_prev = q;
 
     const Transform T_WO = world.ObjectPose();
@@ -519,7 +568,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       Eigen::VectorXd q_meas(m), tau_meas(m);
       for (int j = 0; j < m; ++j) {
         // The encoder reads the motor side: ahead of the link by the load over the stiffness.
-        const double deflection = effects.Has(Effect::kHandDeflection) ? tau_filtered[j] / stiffness[j] : 0.0;
+        const double deflection =
+            effects.Has(Effect::kHandDeflection) ? tau_filtered[j] / stiffness[j] : 0.0;
         q_meas[j] = q[j] + deflection - bias[j] + noise.joint_sigma * gauss(rng);
         tau_meas[j] = tau_estimate[j] + noise.torque_sigma * gauss(rng);
       }
@@ -535,7 +585,8 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       for (const ContactPair& p : pairs) {
         summary.max_penetration = std::max(summary.max_penetration, -p.distance);
         touching += p.distance < 0.001;
-        contacts_csv << FormatDouble(t) << "," << hand.links[p.link].name << "," << FormatDouble(p.distance) << ",0\n";
+        contacts_csv << FormatDouble(t) << "," << hand.links[p.link].name << ","
+                     << FormatDouble(p.distance) << ",0\n";
       }
       // In-hand rotation: the object's orientation in the palm frame since the fingers began
       // to close (what closing, lifting and manipulating did to it).
@@ -562,8 +613,11 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
       std::vector<Scene> subframes;
       const int count = exposure_steps > 0 ? std::max(1, rp.blur_subframes) : 1;
       for (int i = 0; i < count; ++i) {
-        const int back = count > 1 ? static_cast<int>(std::lround(double(exposure_steps) * (count - 1 - i) / (count - 1))) : 0;
-        const auto& [links, T_WO_then] = recent[recent.size() - 1 - std::min<std::size_t>(back, recent.size() - 1)];
+        const int back = count > 1 ? static_cast<int>(std::lround(double(exposure_steps) *
+                                                                  (count - 1 - i) / (count - 1)))
+                                   : 0;
+        const auto& [links, T_WO_then] =
+            recent[recent.size() - 1 - std::min<std::size_t>(back, recent.size() - 1)];
         Scene scene = world_scene;
         AddHand(scene, hand_meshes, links);
         AddObject(scene, object_meshes, T_WO_then);
@@ -603,20 +657,26 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   const Vec3 world_size = object.Bounds().Size(), model_size = model_object.Bounds().Size();
   realism["world_object_size_m"] = {world_size.x(), world_size.y(), world_size.z()};
   realism["model_object_size_m"] = {model_size.x(), model_size.y(), model_size.z()};
-  if (effects.Has(Effect::kObjectScale)) realism["object_scale"] = {object_scale.x(), object_scale.y(), object_scale.z()};
+  if (effects.Has(Effect::kObjectScale))
+    realism["object_scale"] = {object_scale.x(), object_scale.y(), object_scale.z()};
   if (simplified)
-    realism["simplified_model"] = {{"triangles", simplified->triangles_after}, {"model_triangles", simplified->triangles_before},
-                                   {"pieces", simplified->pieces_after}, {"model_pieces", simplified->pieces_before}};
-  if (effects.Has(Effect::kObjectColour)) realism["colour_gains_rgb"] = {colour_gains.x(), colour_gains.y(), colour_gains.z()};
+    realism["simplified_model"] = {{"triangles", simplified->triangles_after},
+                                   {"model_triangles", simplified->triangles_before},
+                                   {"pieces", simplified->pieces_after},
+                                   {"model_pieces", simplified->pieces_before}};
+  if (effects.Has(Effect::kObjectColour))
+    realism["colour_gains_rgb"] = {colour_gains.x(), colour_gains.y(), colour_gains.z()};
   if (effects.Has(Effect::kObjectTags)) {
     jsonf::Json tags = jsonf::Json::array();
-    for (const TagPlacement& t : object.tags) tags.push_back({{"id", t.id}, {"true_pose", jsonf::PoseToJson(t.T_OT)}});
+    for (const TagPlacement& t : object.tags)
+      tags.push_back({{"id", t.id}, {"true_pose", jsonf::PoseToJson(t.T_OT)}});
     realism["tags"] = tags;
   }
   if (effects.Has(Effect::kHandGeometry)) {
     jsonf::Json offsets = jsonf::Json::object();
     for (std::size_t j = 0; j < hand.joints.size(); ++j)
-      offsets[hand.joints[j].name] = {joint_origin_offsets[j].x(), joint_origin_offsets[j].y(), joint_origin_offsets[j].z()};
+      offsets[hand.joints[j].name] = {joint_origin_offsets[j].x(), joint_origin_offsets[j].y(),
+                                      joint_origin_offsets[j].z()};
     realism["joint_origin_offsets_m"] = offsets;
   }
   if (effects.Has(Effect::kHandDeflection)) {
@@ -625,11 +685,18 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
     for (int j = 0; j < m; ++j) ks[q_names[static_cast<std::size_t>(j)]] = stiffness[j];
     realism["joint_stiffness_Nm_per_rad"] = ks;
     realism["nominal_joint_stiffness_Nm_per_rad"] = rp.joint_stiffness;
-    realism["deflection_convention"] = "q_motor (recorded, before bias and noise) = q_link + tau_contact / k";
+    realism["deflection_convention"] =
+        "q_motor (recorded, before bias and noise) = q_link + tau_contact / k";
   }
   if (opt.images) {
-    realism["true_intrinsics"] = {{"fx", K_lens.fx}, {"fy", K_lens.fy}, {"cx", K_lens.cx}, {"cy", K_lens.cy},
-                                  {"distortion", {K_lens.distortion[0], K_lens.distortion[1], K_lens.distortion[2], K_lens.distortion[3], K_lens.distortion[4]}}};
+    realism["true_intrinsics"] = {
+        {"fx", K_lens.fx},
+        {"fy", K_lens.fy},
+        {"cx", K_lens.cx},
+        {"cy", K_lens.cy},
+        {"distortion",
+         {K_lens.distortion[0], K_lens.distortion[1], K_lens.distortion[2], K_lens.distortion[3],
+          K_lens.distortion[4]}}};
     if (camera) realism["lamp"] = {light.lamp.x(), light.lamp.y(), light.lamp.z()};
   }
   const Quat he(hand_eye_error.linear());
@@ -650,14 +717,16 @@ SimulationSummary Simulate(const SimulateOptions& opt) {
   writer->AddFile("truth/contacts.csv", contacts_csv.str());
   writer->AddFile("truth/joints.csv", joints_true_csv.str());
   writer->Commit();
-  summary.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  summary.wall_time =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return summary;
 }
 
 std::vector<ScenarioInfo> ListScenarios() {
   std::vector<ScenarioInfo> out;
   for (const sim::Scenario& s : sim::Scenarios())
-    out.push_back({s.name, s.description, s.duration(), (fs::path(AssetDir()) / "objects" / s.object / "object.json").string()});
+    out.push_back({s.name, s.description, s.duration(),
+                   (fs::path(AssetDir()) / "objects" / s.object / "object.json").string()});
   return out;
 }
 

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/video.hpp"
@@ -26,7 +26,8 @@ Json ModelJson(const std::string& args, int expected_joints) {
   const Json j = Json::parse(r.output);
   EXPECT_EQ(j.at("joints").size(), static_cast<std::size_t>(expected_joints)) << args;
   for (const Json& joint : j.at("joints")) {
-    EXPECT_TRUE(joint.contains("name") && joint.contains("type") && joint.contains("lower") && joint.contains("upper"));
+    EXPECT_TRUE(joint.contains("name") && joint.contains("type") && joint.contains("lower") &&
+                joint.contains("upper"));
   }
   EXPECT_GT(j.at("pieces").get<int>(), 0);
   EXPECT_GT(j.at("triangles").get<int>(), 0);
@@ -38,7 +39,8 @@ TEST(Cli, ModelOnTheProjectHand) {
   const Json j = ModelJson(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), 16);
   EXPECT_EQ(j.at("joints")[0].at("name"), "index_abduction");
   EXPECT_EQ(j.at("palm_link"), "palm");
-  const test::CommandResult text = test::RunInhand("model " + test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
+  const test::CommandResult text =
+      test::RunInhand("model " + test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_NE(text.output.find("16 joints"), std::string::npos);
 }
@@ -47,22 +49,30 @@ TEST(Cli, ModelOnEverySharedHand) {
   INHAND_REQUIRE_SHARED_ASSETS();
   const std::string hands = test::SharedAssets() + "/hands/";
   const std::vector<std::pair<std::string, int>> urdfs = {
-      {"allegro_hand/allegro_hand_left.urdf", 16},  {"allegro_hand/allegro_hand_left_glb.urdf", 16},
-      {"allegro_hand/allegro_hand_right.urdf", 16}, {"allegro_hand/allegro_hand_right_glb.urdf", 16},
+      {"allegro_hand/allegro_hand_left.urdf", 16},
+      {"allegro_hand/allegro_hand_left_glb.urdf", 16},
+      {"allegro_hand/allegro_hand_right.urdf", 16},
+      {"allegro_hand/allegro_hand_right_glb.urdf", 16},
       {"allegro_hand_description/allegro_hand_description_left.urdf", 16},
       {"allegro_hand_description/allegro_hand_description_right.urdf", 16},
-      {"barrett_hand/bhand_model.urdf", 8},         {"barrett_hand/bhand_model_glb.urdf", 8},
-      {"shadow_hand/shadow_hand_left.urdf", 24},    {"shadow_hand/shadow_hand_left_glb.urdf", 24},
-      {"shadow_hand/shadow_hand_right.urdf", 24},   {"shadow_hand/shadow_hand_right_glb.urdf", 24}};
+      {"barrett_hand/bhand_model.urdf", 8},
+      {"barrett_hand/bhand_model_glb.urdf", 8},
+      {"shadow_hand/shadow_hand_left.urdf", 24},
+      {"shadow_hand/shadow_hand_left_glb.urdf", 24},
+      {"shadow_hand/shadow_hand_right.urdf", 24},
+      {"shadow_hand/shadow_hand_right_glb.urdf", 24}};
   for (const auto& [urdf, n] : urdfs) ModelJson(hands + urdf, n);
   // The original Allegro description with an explicit package map too.
-  ModelJson(hands + "allegro_hand_description/allegro_hand_description_right.urdf --package allegro_hand_description=" +
+  ModelJson(hands +
+                "allegro_hand_description/allegro_hand_description_right.urdf --package "
+                "allegro_hand_description=" +
                 hands + "allegro_hand_description",
             16);
 }
 
 TEST(Cli, ModelOnObjects) {
-  const test::CommandResult r = test::RunInhand("model " + test::ProjectAsset("objects/brush/object.json") + " --json");
+  const test::CommandResult r =
+      test::RunInhand("model " + test::ProjectAsset("objects/brush/object.json") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Json j = Json::parse(r.output);
   EXPECT_EQ(j.at("name"), "brush");
@@ -77,7 +87,8 @@ TEST(Cli, ModelRecognisesAYcbObject) {
   INHAND_REQUIRE_SHARED_ASSETS();
   test::TempDir dir;
   const std::string urdf = test::SharedAssets() + "/objects/ycb/mustard_bottle.urdf";
-  const test::CommandResult r = test::RunInhand("model " + urdf + " --json --render " + (dir / "mustard.png"));
+  const test::CommandResult r =
+      test::RunInhand("model " + urdf + " --json --render " + (dir / "mustard.png"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Json j = Json::parse(r.output.substr(0, r.output.rfind('}') + 1));
   EXPECT_EQ(j.at("kind"), "object");
@@ -86,8 +97,10 @@ TEST(Cli, ModelRecognisesAYcbObject) {
   const double ratio = j.at("pieces_volume").get<double>() / j.at("mesh_volume").get<double>();
   EXPECT_GT(ratio, 0.8);
   EXPECT_LT(ratio, 1.2);
-  EXPECT_NE(j.at("decomposition").get<std::string>().find("components of textured_vhacd.stl"), std::string::npos);
-  EXPECT_NE(j.at("contact_field").at("source").get<std::string>().find("closed mesh"), std::string::npos);
+  EXPECT_NE(j.at("decomposition").get<std::string>().find("components of textured_vhacd.stl"),
+            std::string::npos);
+  EXPECT_NE(j.at("contact_field").at("source").get<std::string>().find("closed mesh"),
+            std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(j.at("contact_field").at("cache_file").get<std::string>()));
   EXPECT_EQ(j.at("mesh_files").size(), 2u);
   // The pieces' view is colourful: many distinct saturated colours.
@@ -131,25 +144,31 @@ TEST(Cli, CompareExitCodesAndDiff) {
   const test::CommandResult same = test::RunInhand("compare " + golden + " " + golden);
   EXPECT_EQ(same.exit_code, 0) << same.output;
   EXPECT_NE(same.output.find("max channel delta 0"), std::string::npos);
-  const test::CommandResult differ = test::RunInhand("compare " + golden + " " + test::SourceDir() +
-                                                     "/tests/golden/overlay_fig1.png --diff " + (dir / "d.png"));
+  const test::CommandResult differ =
+      test::RunInhand("compare " + golden + " " + test::SourceDir() +
+                      "/tests/golden/overlay_fig1.png --diff " + (dir / "d.png"));
   EXPECT_EQ(differ.exit_code, 1) << differ.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "d.png"));
   // Loose enough tolerances accept the same pair.
   EXPECT_EQ(test::RunInhand("compare " + golden + " " + test::SourceDir() +
-                            "/tests/golden/overlay_fig1.png --max-channel-delta 255").exit_code, 0);
-  const test::CommandResult missing = test::RunInhand("compare " + golden + " " + (dir / "none.png"));
+                            "/tests/golden/overlay_fig1.png --max-channel-delta 255")
+                .exit_code,
+            0);
+  const test::CommandResult missing =
+      test::RunInhand("compare " + golden + " " + (dir / "none.png"));
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.output.find("none.png"), std::string::npos);
   dir.Write("bad.png", "not an image");
   EXPECT_EQ(test::RunInhand("compare " + golden + " " + (dir / "bad.png")).exit_code, 2);
-  EXPECT_EQ(test::RunInhand("compare " + golden + " " + golden + " --max-bad-fraction 3").exit_code, 2);
+  EXPECT_EQ(test::RunInhand("compare " + golden + " " + golden + " --max-bad-fraction 3").exit_code,
+            2);
 }
 
 TEST(Cli, ModelRenderWritesAPreview) {
   test::TempDir dir;
-  const test::CommandResult r = test::RunInhand("model " + test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf") +
-                                                " --render " + (dir / "hand.png"));
+  const test::CommandResult r =
+      test::RunInhand("model " + test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf") +
+                      " --render " + (dir / "hand.png"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Image8 img = ReadImage(dir / "hand.png");
   EXPECT_EQ(img.height, 480);
@@ -170,7 +189,8 @@ namespace {
 // One short simulated session shared by the replay tests (no noise, 1.2 s, small images).
 // Removed when the test process ends.
 struct SessionDir {
-  std::string path = std::filesystem::temp_directory_path().string() + "/inhand-cli-test-session-" + std::to_string(::getpid());
+  std::string path = std::filesystem::temp_directory_path().string() + "/inhand-cli-test-session-" +
+                     std::to_string(::getpid());
   ~SessionDir() {
     std::error_code ec;
     std::filesystem::remove_all(path, ec);
@@ -180,7 +200,8 @@ struct SessionDir {
 const std::string& ShortSession() {
   static const SessionDir dir;
   static const bool made = [] {
-    const test::CommandResult r = test::RunInhand("simulate ketchup-power-grasp --noise none --seed 2 --overwrite --out " + dir.path);
+    const test::CommandResult r = test::RunInhand(
+        "simulate ketchup-power-grasp --noise none --seed 2 --overwrite --out " + dir.path);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return r.exit_code == 0;
   }();
@@ -193,28 +214,35 @@ const std::string& ShortSession() {
 TEST(Cli, CompareFoldersOfReplayFrames) {
   test::TempDir dir;
   for (const char* out : {"a", "b"}) {
-    const test::CommandResult r = test::RunInhand("replay " + ShortSession() + " --modalities j,jt --frames --out " + (dir / out));
+    const test::CommandResult r = test::RunInhand(
+        "replay " + ShortSession() + " --modalities j,jt --frames --out " + (dir / out));
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   const std::string a = dir / "a/frames", b = dir / "b/frames";
   const std::string zero = " --max-channel-delta 0 --max-bad-fraction 0";
   const test::CommandResult same = test::RunInhand("compare " + a + " " + b + zero);
   EXPECT_EQ(same.exit_code, 0) << same.output;
-  EXPECT_NE(same.output.find("match: 51 frame pairs compared, 0 differ"), std::string::npos) << same.output;
+  EXPECT_NE(same.output.find("match: 51 frame pairs compared, 0 differ"), std::string::npos)
+      << same.output;
   // One frame changed in 40 pixels, one removed.
   Image8 img = ReadImage(b + "/frame_000007.png");
-  for (int x = 100; x < 140; ++x) img.pixel(x, 100)[0] = static_cast<std::uint8_t>(255 - img.pixel(x, 100)[0]);
+  for (int x = 100; x < 140; ++x)
+    img.pixel(x, 100)[0] = static_cast<std::uint8_t>(255 - img.pixel(x, 100)[0]);
   WriteImage(b + "/frame_000007.png", img);
   std::filesystem::remove(b + "/frame_000030.png");
-  const test::CommandResult differ = test::RunInhand("compare " + a + " " + b + zero + " --diff " + (dir / "diff"));
+  const test::CommandResult differ =
+      test::RunInhand("compare " + a + " " + b + zero + " --diff " + (dir / "diff"));
   EXPECT_EQ(differ.exit_code, 1) << differ.output;
-  EXPECT_NE(differ.output.find("DIFFER: 50 frame pairs compared, 2 differ"), std::string::npos) << differ.output;
-  EXPECT_NE(differ.output.find("frame_000030.png: only in " + a), std::string::npos) << differ.output;
+  EXPECT_NE(differ.output.find("DIFFER: 50 frame pairs compared, 2 differ"), std::string::npos)
+      << differ.output;
+  EXPECT_NE(differ.output.find("frame_000030.png: only in " + a), std::string::npos)
+      << differ.output;
   EXPECT_NE(differ.output.find("frame_000007.png: "), std::string::npos) << differ.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "diff/frame_000007.png"));
   EXPECT_FALSE(std::filesystem::exists(dir / "diff/frame_000008.png"));
   // Within a tolerance that allows those 40 bad pixels, the changed frame matches.
-  const test::CommandResult tolerant = test::RunInhand("compare " + a + " " + b + " --max-channel-delta 0 --max-bad-fraction 0.0002");
+  const test::CommandResult tolerant = test::RunInhand(
+      "compare " + a + " " + b + " --max-channel-delta 0 --max-bad-fraction 0.0002");
   EXPECT_NE(tolerant.output.find("1 differ"), std::string::npos) << tolerant.output;
   const test::CommandResult mixed = test::RunInhand("compare " + a + " " + a + "/frame_000001.png");
   EXPECT_EQ(mixed.exit_code, 2) << mixed.output;
@@ -223,9 +251,11 @@ TEST(Cli, CompareFoldersOfReplayFrames) {
 
 TEST(Cli, ReplayEndToEnd) {
   test::TempDir dir;
-  const test::CommandResult r = test::RunInhand("replay " + ShortSession() + " --out " + (dir / "replay") + " --frames");
+  const test::CommandResult r =
+      test::RunInhand("replay " + ShortSession() + " --out " + (dir / "replay") + " --frames");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* f : {"estimates.csv", "summary.json", "params.json", "replay.mp4", "frames/frame_000000.png"})
+  for (const char* f :
+       {"estimates.csv", "summary.json", "params.json", "replay.mp4", "frames/frame_000000.png"})
     EXPECT_TRUE(std::filesystem::exists(dir / ("replay/" + std::string(f)))) << f;
   std::ifstream in(dir / "replay/summary.json");
   const Json s = Json::parse(in);
@@ -245,8 +275,12 @@ TEST(Cli, ReplayEndToEnd) {
 
 TEST(Cli, ReplayIsDeterministic) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "a")).exit_code, 0);
-  ASSERT_EQ(test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "b")).exit_code, 0);
+  ASSERT_EQ(
+      test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "a")).exit_code,
+      0);
+  ASSERT_EQ(
+      test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "b")).exit_code,
+      0);
   const auto read = [](const std::string& p) {
     std::ifstream in(p);
     std::stringstream ss;
@@ -263,7 +297,8 @@ TEST(Cli, ParallelReplayEqualsSequential) {
   test::TempDir dir;
   for (const char* jobs : {"1", "2"}) {
     const test::CommandResult r =
-        test::RunInhand("replay " + ShortSession() + " --frames --mcap --jobs " + std::string(jobs) + " --out " + (dir / jobs));
+        test::RunInhand("replay " + ShortSession() + " --frames --mcap --jobs " +
+                        std::string(jobs) + " --out " + (dir / jobs));
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   const auto read = [](const std::string& p) {
@@ -273,13 +308,17 @@ TEST(Cli, ParallelReplayEqualsSequential) {
     return ss.str();
   };
   EXPECT_EQ(read(dir / "1/estimates.csv"), read(dir / "2/estimates.csv"));
-  EXPECT_NE(read(dir / "1/estimates.csv").find(",jtf,"), std::string::npos);  // every set ran, images too
+  EXPECT_NE(read(dir / "1/estimates.csv").find(",jtf,"),
+            std::string::npos);  // every set ran, images too
   EXPECT_EQ(read(dir / "1/replay.mcap"), read(dir / "2/replay.mcap"));
   const test::CommandResult same =
-      test::RunInhand("compare " + (dir / "1/frames") + " " + (dir / "2/frames") + " --max-channel-delta 0 --max-bad-fraction 0");
+      test::RunInhand("compare " + (dir / "1/frames") + " " + (dir / "2/frames") +
+                      " --max-channel-delta 0 --max-bad-fraction 0");
   EXPECT_EQ(same.exit_code, 0) << same.output;
-  EXPECT_NE(same.output.find("match: 51 frame pairs compared, 0 differ"), std::string::npos) << same.output;
-  EXPECT_EQ(test::RunInhand("replay " + ShortSession() + " --jobs 0 --out " + (dir / "x")).exit_code, 2);
+  EXPECT_NE(same.output.find("match: 51 frame pairs compared, 0 differ"), std::string::npos)
+      << same.output;
+  EXPECT_EQ(
+      test::RunInhand("replay " + ShortSession() + " --jobs 0 --out " + (dir / "x")).exit_code, 2);
 }
 
 // Issue 6: fingers around a bottle leave its axis unobservable (position along it, rotation
@@ -289,12 +328,18 @@ TEST(Cli, ParallelReplayEqualsSequential) {
 // leaves it large, or the test would prove nothing.)
 TEST(Cli, TagsRecoverWhatTheFingersLeaveUnobservable) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 1 --out " + (dir / "session")).exit_code, 0);
-  const test::CommandResult r = test::RunInhand("replay " + (dir / "session") + " --modalities j,jta --no-video --out " + (dir / "replay"));
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 1 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
+  const test::CommandResult r = test::RunInhand(
+      "replay " + (dir / "session") + " --modalities j,jta --no-video --out " + (dir / "replay"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(dir / "replay/summary.json");
   const Json m = Json::parse(in).at("modalities");
-  const auto axis = [&](const char* set, const char* key) { return std::abs(m.at(set).at(key).at(2).get<double>()); };
+  const auto axis = [&](const char* set, const char* key) {
+    return std::abs(m.at(set).at(key).at(2).get<double>());
+  };
   const double j_along = axis("j", "terminal_position_error_object_axes_mm");
   const double jta_along = axis("jta", "terminal_position_error_object_axes_mm");
   const double j_about = axis("j", "terminal_orientation_error_object_axes_deg");
@@ -303,7 +348,8 @@ TEST(Cli, TagsRecoverWhatTheFingersLeaveUnobservable) {
   EXPECT_LT(jta_along, 0.3 * j_along);
   EXPECT_LT(jta_along, 5.0);
   EXPECT_LT(jta_about, 0.5 * j_about);
-  EXPECT_LT(m.at("jta").at("terminal_position_error_mm").get<double>(), m.at("j").at("terminal_position_error_mm").get<double>());
+  EXPECT_LT(m.at("jta").at("terminal_position_error_mm").get<double>(),
+            m.at("j").at("terminal_position_error_mm").get<double>());
 }
 
 TEST(Cli, ReplayRejectsBadInputWithoutPartialOutput) {
@@ -319,18 +365,22 @@ TEST(Cli, ReplayRejectsBadInputWithoutPartialOutput) {
     text.replace(text.find(',', line3 + 1) + 1, 1, "nan,");
     std::ofstream(dir / "bad/joints.csv") << text;
   }
-  const test::CommandResult bad = test::RunInhand("replay " + (dir / "bad") + " --out " + (dir / "out"));
+  const test::CommandResult bad =
+      test::RunInhand("replay " + (dir / "bad") + " --out " + (dir / "out"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("joints.csv:4"), std::string::npos) << bad.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));
-  const test::CommandResult missing = test::RunInhand("replay " + (dir / "nowhere") + " --out " + (dir / "out"));
+  const test::CommandResult missing =
+      test::RunInhand("replay " + (dir / "nowhere") + " --out " + (dir / "out"));
   EXPECT_EQ(missing.exit_code, 2);
-  const test::CommandResult sets = test::RunInhand("replay " + ShortSession() + " --modalities j,xyz --out " + (dir / "out"));
+  const test::CommandResult sets =
+      test::RunInhand("replay " + ShortSession() + " --modalities j,xyz --out " + (dir / "out"));
   EXPECT_NE(sets.output.find("expected j followed by any of t"), std::string::npos) << sets.output;
   EXPECT_EQ(sets.exit_code, 2);
   EXPECT_NE(sets.output.find("xyz"), std::string::npos);
   dir.Write("p.json", "{\"contact_sigma\": -1}");
-  const test::CommandResult params = test::RunInhand("replay " + ShortSession() + " --params " + (dir / "p.json") + " --out " + (dir / "out"));
+  const test::CommandResult params = test::RunInhand("replay " + ShortSession() + " --params " +
+                                                     (dir / "p.json") + " --out " + (dir / "out"));
   EXPECT_EQ(params.exit_code, 2);
   EXPECT_NE(params.output.find("contact_sigma"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));
@@ -347,8 +397,10 @@ namespace {
 
 TEST(Cli, TagsJsonReproducesTheUpstreamCorners) {
   INHAND_REQUIRE_SHARED_ASSETS();
-  const std::string image = test::SharedAssets() + "/apriltag/upstream_test_data/test/data/34085369442_304b6bafd9_c.jpg";
-  const test::CommandResult r = test::RunInhand("tags " + image + " --decimate 1 --refine-edges 0 --json 2>/dev/null");
+  const std::string image =
+      test::SharedAssets() + "/apriltag/upstream_test_data/test/data/34085369442_304b6bafd9_c.jpg";
+  const test::CommandResult r =
+      test::RunInhand("tags " + image + " --decimate 1 --refine-edges 0 --json 2>/dev/null");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Json j = Json::parse(r.output);
   ASSERT_FALSE(j.at("detections").empty());
@@ -357,14 +409,16 @@ TEST(Cli, TagsJsonReproducesTheUpstreamCorners) {
   EXPECT_EQ(first.at("id"), 0);
   EXPECT_EQ(first.at("corners").size(), 4u);
   EXPECT_TRUE(first.contains("decision_margin"));
-  std::ifstream expected(test::SharedAssets() + "/apriltag/upstream_test_data/test/data/34085369442_304b6bafd9_c.txt");
+  std::ifstream expected(test::SharedAssets() +
+                         "/apriltag/upstream_test_data/test/data/34085369442_304b6bafd9_c.txt");
   std::string line;
   std::getline(expected, line);
   double x0 = 0, y0 = 0;
   ASSERT_EQ(std::sscanf(line.c_str(), "%*d, (%lf %lf)", &x0, &y0), 2);
   bool found = false;
   for (const Json& d : j.at("detections"))
-    found = found || (std::abs(d.at("corners")[0][0].get<double>() - x0) < 0.1 && std::abs(d.at("corners")[0][1].get<double>() - y0) < 0.1);
+    found = found || (std::abs(d.at("corners")[0][0].get<double>() - x0) < 0.1 &&
+                      std::abs(d.at("corners")[0][1].get<double>() - y0) < 0.1);
   EXPECT_TRUE(found) << line;
   EXPECT_EQ(test::RunInhand("tags " + image + " --refine-edges 3").exit_code, 2);
   EXPECT_EQ(test::RunInhand("tags /nonexistent.png").exit_code, 2);
@@ -378,10 +432,12 @@ namespace {
 
 TEST(Cli, MatchWritesEveryStage) {
   test::TempDir dir;
-  const test::CommandResult r = test::RunInhand("match " + ShortSession() + " --frame 40 --out " + (dir / "m"));
+  const test::CommandResult r =
+      test::RunInhand("match " + ShortSession() + " --frame 40 --out " + (dir / "m"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* f : {"camera.png", "virtual.png", "edges_camera.png", "edges_virtual.png", "corners_camera.png",
-                        "corners_virtual.png", "pieces.png", "hough_votes.png", "matches.png", "stages.png", "matches.json"})
+  for (const char* f : {"camera.png", "virtual.png", "edges_camera.png", "edges_virtual.png",
+                        "corners_camera.png", "corners_virtual.png", "pieces.png",
+                        "hough_votes.png", "matches.png", "stages.png", "matches.json"})
     EXPECT_TRUE(std::filesystem::exists(dir / ("m/" + std::string(f)))) << f;
   std::ifstream in(dir / "m/matches.json");
   const Json j = Json::parse(in);
@@ -390,10 +446,14 @@ TEST(Cli, MatchWritesEveryStage) {
   double before = 0, after = 0;
   int used = 0;
   for (const Json& m : j.at("list"))
-    if (m.at("used").get<bool>()) before += m.at("residual_before_px").get<double>(), after += m.at("residual_after_px").get<double>(), ++used;
+    if (m.at("used").get<bool>())
+      before += m.at("residual_before_px").get<double>(),
+          after += m.at("residual_after_px").get<double>(), ++used;
   ASSERT_GE(used, 1);
   EXPECT_LE(after, before + 1e-9);  // the update does not move the features away
-  EXPECT_EQ(test::RunInhand("match " + ShortSession() + " --frame 100000 --out " + (dir / "x")).exit_code, 2);
+  EXPECT_EQ(
+      test::RunInhand("match " + ShortSession() + " --frame 100000 --out " + (dir / "x")).exit_code,
+      2);
   EXPECT_FALSE(std::filesystem::exists(dir / "x"));
 }
 
@@ -406,21 +466,28 @@ namespace {
 TEST(Cli, EvaluatePlansRunsAndMerges) {
   test::TempDir dir;
   // --plan: one command line per run, nothing executed.
-  const test::CommandResult plan = test::RunInhand("evaluate --out " + (dir / "p") + " --seeds 3 --scenarios ketchup-power-grasp,shampoo-grasp --plan");
+  const test::CommandResult plan =
+      test::RunInhand("evaluate --out " + (dir / "p") +
+                      " --seeds 3 --scenarios ketchup-power-grasp,shampoo-grasp --plan");
   ASSERT_EQ(plan.exit_code, 0) << plan.output;
   std::ifstream in(dir / "p/plan.txt");
   int lines = 0;
-  for (std::string line; std::getline(in, line);) lines += line.find(" simulate ") != std::string::npos;
+  for (std::string line; std::getline(in, line);)
+    lines += line.find(" simulate ") != std::string::npos;
   EXPECT_EQ(lines, 6);
   // The pen carries no tags: its runs replay j, jt, jtf, and the user is told (a jta run failed
   // every pen run before).
-  const test::CommandResult pen = test::RunInhand("evaluate --out " + (dir / "pen") + " --seeds 1 --scenarios pen-fingertip --plan");
+  const test::CommandResult pen = test::RunInhand("evaluate --out " + (dir / "pen") +
+                                                  " --seeds 1 --scenarios pen-fingertip --plan");
   ASSERT_EQ(pen.exit_code, 0) << pen.output;
-  EXPECT_NE(pen.output.find("pen-fingertip: jta left out (the object has no AprilTags)"), std::string::npos) << pen.output;
+  EXPECT_NE(pen.output.find("pen-fingertip: jta left out (the object has no AprilTags)"),
+            std::string::npos)
+      << pen.output;
   const std::string pen_plan = test::ReadFile(dir / "pen/plan.txt");
   EXPECT_NE(pen_plan.find("--modalities 'j,jt,jtf'"), std::string::npos) << pen_plan;
   // A real (small) evaluation: one seed of one scenario.
-  const test::CommandResult run = test::RunInhand("evaluate --out " + (dir / "e") + " --seeds 1 --scenarios ketchup-power-grasp");
+  const test::CommandResult run = test::RunInhand("evaluate --out " + (dir / "e") +
+                                                  " --seeds 1 --scenarios ketchup-power-grasp");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   std::ifstream t(dir / "e/table1.json");
   const Json table = Json::parse(t);
@@ -456,8 +523,9 @@ double Variety(const Image8& img, int x0, int y0, int x1, int y1) {
 void ExpectInterface(const Image8& img) {
   ASSERT_EQ(img.width, 1280);
   ASSERT_EQ(img.height, 800);
-  EXPECT_GT(Variety(img, 0, 0, 310, 800), 0.02);      // the control panel is drawn
-  EXPECT_GT(Variety(img, 320, 30, 1270, 260), 0.3);   // the camera / virtual / 3-D picture is not blank
+  EXPECT_GT(Variety(img, 0, 0, 310, 800), 0.02);  // the control panel is drawn
+  EXPECT_GT(Variety(img, 320, 30, 1270, 260),
+            0.3);  // the camera / virtual / 3-D picture is not blank
 }
 
 #ifdef INHAND_WITH_GUI
@@ -469,7 +537,9 @@ void ExpectInterface(const Image8& img) {
 TEST(Gui, HeadlessScreenshotWithoutAnyDisplay) {
   INHAND_REQUIRE_GUI();
   test::TempDir dir;
-  const test::CommandResult r = test::RunInhand("gui " + ShortSession() + " --time 3.0 --frames 3 --screenshot " + (dir / "gui.png"), "env -u DISPLAY");
+  const test::CommandResult r = test::RunInhand(
+      "gui " + ShortSession() + " --time 3.0 --frames 3 --screenshot " + (dir / "gui.png"),
+      "env -u DISPLAY");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   ExpectInterface(ReadImage(dir / "gui.png"));
   // Without a display and without --screenshot: one clear line, non-zero exit.
@@ -480,10 +550,12 @@ TEST(Gui, HeadlessScreenshotWithoutAnyDisplay) {
 
 TEST(Gui, RealWindowUnderXvfb) {
   INHAND_REQUIRE_GUI();
-  if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run not installed";
+  if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xvfb-run not installed";
   test::TempDir dir;
-  const test::CommandResult r = test::RunInhand("gui " + ShortSession() + " --time 3.0 --play --frames 20 --screenshot " + (dir / "gui.png"),
-                                                "xvfb-run -a -s '-screen 0 1280x800x24'");
+  const test::CommandResult r = test::RunInhand(
+      "gui " + ShortSession() + " --time 3.0 --play --frames 20 --screenshot " + (dir / "gui.png"),
+      "xvfb-run -a -s '-screen 0 1280x800x24'");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("frame time median"), std::string::npos) << r.output;
   ExpectInterface(ReadImage(dir / "gui.png"));

@@ -18,7 +18,10 @@ using app::SessionPlayer;
 // uninterrupted one, for every modality set, across camera frames (tags and extracted features).
 TEST(SessionPlayer, CheckpointResumesBitIdentically) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " + (dir / "session")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
   Session session = Session::Load(dir / "session");
   SessionPlayer player(session, TrackerParams());
   ASSERT_EQ(player.sets().size(), 4u);
@@ -31,7 +34,8 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
     player.Step(k);
     for (std::size_t i = 0; i < player.sets().size(); ++i) first[i].push_back(player.last(i).T_PO);
   }
-  for (std::size_t i = 0; i < player.sets().size(); ++i) first_P.push_back(player.tracker(i).covariance());
+  for (std::size_t i = 0; i < player.sets().size(); ++i)
+    first_P.push_back(player.tracker(i).covariance());
 
   player.Restore(checkpoint);
   int frames = 0;
@@ -44,7 +48,8 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
       ASSERT_EQ(a.matrix(), b.matrix()) << player.sets()[i].name << " at sample " << k;
     }
   }
-  for (std::size_t i = 0; i < player.sets().size(); ++i) EXPECT_EQ(first_P[i], player.tracker(i).covariance());
+  for (std::size_t i = 0; i < player.sets().size(); ++i)
+    EXPECT_EQ(first_P[i], player.tracker(i).covariance());
   // The stretch replayed must hold camera frames, or the test would not cover the visual step.
   EXPECT_GE(frames, 8);
 }
@@ -53,7 +58,10 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
 // sample's gated count is its contacts' and features' once (the visual gates were added twice).
 TEST(SessionPlayer, VisualRecordsOfTagsAndFeatures) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 5 --out " + (dir / "session")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 5 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
   Session session = Session::Load(dir / "session");
   SessionPlayer player(session, TrackerParams(), app::ParseModalities("jta,jtf"));
   int frames = 0;
@@ -85,13 +93,15 @@ TEST(Modalities, EveryCombinationParsesToOneNameAndColour) {
     EXPECT_EQ(sets[i].features, names[i].find('f') != std::string::npos);
     for (std::size_t k = 0; k < i; ++k) {
       const Rgb a = sets[i].colour, b = sets[k].colour;
-      EXPECT_GT(std::abs(a.r - b.r) + std::abs(a.g - b.g) + std::abs(a.b - b.b), 60) << names[i] << " vs " << names[k];
+      EXPECT_GT(std::abs(a.r - b.r) + std::abs(a.g - b.g) + std::abs(a.b - b.b), 60)
+          << names[i] << " vs " << names[k];
     }
   }
   // The paper's four keep the paper's colours.
   EXPECT_EQ(sets[1].colour.b, kColourTorques.b);
   EXPECT_EQ(sets[5].colour.g, kColourFeatures.g);
-  for (const char* bad : {"", "t", "jx", "jtt", "j,ja,aj"}) EXPECT_THROW(app::ParseModalities(bad), InputError) << bad;
+  for (const char* bad : {"", "t", "jx", "jtt", "j,ja,aj"})
+    EXPECT_THROW(app::ParseModalities(bad), InputError) << bad;
   EXPECT_THROW(app::ParseModalities("ja,jaa"), InputError);
   EXPECT_THROW(app::ParseModalities("jta,jat"), InputError);  // the same set twice
   EXPECT_EQ(app::DefaultModalities(true, true, true), "j,jt,jta,jtf");
@@ -106,9 +116,11 @@ void WriteCopy(const Session& sim, SessionInfo info, const std::string& out, boo
   info.object = sim.Resolve(info.object);
   for (auto& [name, path] : info.packages) path = sim.Resolve(path);
   SessionWriter w(out, info, sim.joint_names(), false, torques);
-  for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(sim.t(k), sim.q(k), torques ? Eigen::VectorXd(sim.tau(k)) : Eigen::VectorXd());
+  for (int k = 0; k < sim.num_samples(); ++k)
+    w.AddJointSample(sim.t(k), sim.q(k), torques ? Eigen::VectorXd(sim.tau(k)) : Eigen::VectorXd());
   for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
-    w.AddCameraFrame(sim.camera_frames()[i].t, sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
+    w.AddCameraFrame(sim.camera_frames()[i].t, sim.LoadImage(static_cast<int>(i)),
+                     sim.camera_frames()[i].T_PC);
   for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(g.t, g.T_PO);
   w.Commit();
 }
@@ -120,10 +132,14 @@ void WriteCopy(const Session& sim, SessionInfo info, const std::string& out, boo
 // is its filter's (the grip loosened): the ketchup scenario loosens it at 4.5 s.
 TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "session")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
   const Session sim = Session::Load(dir / "session");
   SessionInfo info = sim.info();
-  info.initial_T_PO.linear() = ExpSO3(Vec3(0.0, 0.0, 120.0 * M_PI / 180)) * info.initial_T_PO.linear();
+  info.initial_T_PO.linear() =
+      ExpSO3(Vec3(0.0, 0.0, 120.0 * M_PI / 180)) * info.initial_T_PO.linear();
   info.initial_T_PO.translation() += 0.03 * sim.camera_frames()[0].T_PC.linear().col(0);
   info.sigma_position = 0.002;
   info.sigma_orientation = 1.0 * M_PI / 180;
@@ -157,7 +173,8 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
   }
   EXPECT_EQ(found_samples[0], 0);
   EXPECT_GT(found_at, 0.0);
-  EXPECT_GE(found_samples[1], 400);  // the second after it at 500 Hz, give or take the last image's lag
+  EXPECT_GE(found_samples[1],
+            400);  // the second after it at 500 Hz, give or take the last image's lag
   EXPECT_LE(found_samples[1], 501);
   EXPECT_GT(player.tracker(1).stats().last_relocalized, 0.02);
   EXPECT_GT(slipping_samples[0], 0);
@@ -172,8 +189,10 @@ TEST(FrameComposer, TheHudLineGivesTheLargestSigmaOfPositionAndOrientation) {
   app::PictureState::Set set;
   const Mat3 Q = ExpSO3(Vec3(0.3, -0.5, 0.8));
   const double deg = M_PI / 180;
-  set.pose_covariance.topLeftCorner<3, 3>() = Q * Vec3(1e-3, 3e-3, 2e-3).cwiseAbs2().asDiagonal() * Q.transpose();
-  set.pose_covariance.bottomRightCorner<3, 3>() = Q.transpose() * Vec3(1 * deg, 5 * deg, 2 * deg).cwiseAbs2().asDiagonal() * Q;
+  set.pose_covariance.topLeftCorner<3, 3>() =
+      Q * Vec3(1e-3, 3e-3, 2e-3).cwiseAbs2().asDiagonal() * Q.transpose();
+  set.pose_covariance.bottomRightCorner<3, 3>() =
+      Q.transpose() * Vec3(1 * deg, 5 * deg, 2 * deg).cwiseAbs2().asDiagonal() * Q;
   set.pose_covariance.topRightCorner<3, 3>() = 1e-6 * Q;  // correlations do not enter
   set.pose_covariance.bottomLeftCorner<3, 3>() = 1e-6 * Q.transpose();
   EXPECT_NEAR(app::LargestSigma(set.pose_covariance.topLeftCorner<3, 3>()), 3e-3, 1e-12);
@@ -184,18 +203,24 @@ TEST(FrameComposer, TheHudLineGivesTheLargestSigmaOfPositionAndOrientation) {
   set.record.constraints = 2;
   set.record.slipping = true;
   set.found_again = 0.0466;
-  EXPECT_EQ(app::HudLine("jta", set), "jta: 14.2 mm / 6.1 deg, sigma 3.0 mm / 5.0 deg, 2 constraints, found again 46.6 mm away, grip loosened");
+  EXPECT_EQ(app::HudLine("jta", set),
+            "jta: 14.2 mm / 6.1 deg, sigma 3.0 mm / 5.0 deg, 2 constraints, found again 46.6 mm "
+            "away, grip loosened");
 }
 
 // A hand without torque sensors: the same recording with its tau: columns removed replays j
 // bit-identically (torques never reach j), runs ja and jf by default, and refuses jt.
 TEST(SessionPlayer, TorqueFreeSessionRunsJointsTagsAndFeatures) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 6 --out " + (dir / "session")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 6 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
   const Session sim = Session::Load(dir / "session");
   // Two copies through the same writer (a session.json round trip rounds the initial pose),
   // with and without the torque columns.
-  for (const bool torques : {true, false}) WriteCopy(sim, sim.info(), dir / (torques ? "with_tau" : "no_tau"), torques);
+  for (const bool torques : {true, false})
+    WriteCopy(sim, sim.info(), dir / (torques ? "with_tau" : "no_tau"), torques);
   const Session full = Session::Load(dir / "with_tau");
   const Session bare = Session::Load(dir / "no_tau");
   EXPECT_TRUE(full.has_torques());

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "test_support.hpp"
 
@@ -26,9 +26,11 @@ std::string Read(const std::string& path) {
 
 // A noise-free ketchup session for this binary's tests (simulated once).
 const std::string& Session() {
-  static const std::string path = fs::temp_directory_path().string() + "/inhand-robustness-session-" + std::to_string(::getpid());
+  static const std::string path = fs::temp_directory_path().string() +
+                                  "/inhand-robustness-session-" + std::to_string(::getpid());
   static const bool made = [] {
-    const test::CommandResult r = test::RunInhand("simulate ketchup-power-grasp --noise none --seed 3 --out " + path);
+    const test::CommandResult r =
+        test::RunInhand("simulate ketchup-power-grasp --noise none --seed 3 --out " + path);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     std::atexit([] {
       std::error_code ec;
@@ -46,38 +48,50 @@ TEST(Robustness, OutputFoldersReplaceOnlyWhatInhandWrote) {
   fs::copy(Session(), dir / "session", fs::copy_options::recursive);
   const std::string before = Read(dir / "session/joints.csv");
   // The input itself, and a folder that contains it.
-  test::CommandResult r = test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " + (dir / "session"));
+  test::CommandResult r = test::RunInhand("replay " + (dir / "session") +
+                                          " --no-video --modalities j --out " + (dir / "session"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("is the input"), std::string::npos) << r.output;
-  r = test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " + dir.path());
+  r = test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " +
+                      dir.path());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(Read(dir / "session/joints.csv"), before);
   // The current folder ("." and "./"), from inside it.
   fs::create_directories(dir / "work");
   dir.Write("work/notes.txt", "mine");
   for (const char* out : {".", "./", "../work"}) {
-    r = test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " + out, "cd " + (dir / "work") + " &&");
+    r = test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " + out,
+                        "cd " + (dir / "work") + " &&");
     EXPECT_EQ(r.exit_code, 2) << out << ": " << r.output;
     EXPECT_NE(r.output.find("current folder"), std::string::npos) << r.output;
   }
   EXPECT_EQ(Read(dir / "work/notes.txt"), "mine");
   // A folder of someone else's files: refused; an empty one: used; inhand's own: replaced.
   dir.Write("theirs/thesis.tex", "years of work");
-  r = test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " + (dir / "theirs"));
+  r = test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " +
+                      (dir / "theirs"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("not written by inhand"), std::string::npos) << r.output;
   EXPECT_EQ(Read(dir / "theirs/thesis.tex"), "years of work");
   fs::create_directories(dir / "empty");
-  EXPECT_EQ(test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " + (dir / "empty")).exit_code, 0);
+  EXPECT_EQ(test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " +
+                            (dir / "empty"))
+                .exit_code,
+            0);
   EXPECT_TRUE(fs::exists(dir / "empty/.inhand-output"));
-  EXPECT_EQ(test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " + (dir / "empty")).exit_code, 0);
+  EXPECT_EQ(test::RunInhand("replay " + (dir / "session") + " --no-video --modalities j --out " +
+                            (dir / "empty"))
+                .exit_code,
+            0);
   // simulate --overwrite and match follow the same rule.
-  r = test::RunInhand("simulate ketchup-power-grasp --no-images --overwrite --out " + (dir / "theirs"));
+  r = test::RunInhand("simulate ketchup-power-grasp --no-images --overwrite --out " +
+                      (dir / "theirs"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(Read(dir / "theirs/thesis.tex"), "years of work");
   r = test::RunInhand("match " + (dir / "session") + " --frame 0 --out " + (dir / "theirs"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  r = test::RunInhand("evaluate --scenarios pen-fingertip --seeds 1 --plan --out " + (dir / "theirs"));
+  r = test::RunInhand("evaluate --scenarios pen-fingertip --seeds 1 --plan --out " +
+                      (dir / "theirs"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(Read(dir / "theirs/thesis.tex"), "years of work");
 }
@@ -88,15 +102,18 @@ TEST(Robustness, StaleStagingFoldersAreRemoved) {
   fs::create_directories(dir / ".out.tmp-999999999");
   dir.Write(".out.tmp-999999999/estimates.csv", "half");
   fs::create_directories(dir / (".out.tmp-" + std::to_string(::getpid())));  // a live process's
-  ASSERT_EQ(test::RunInhand("replay " + Session() + " --no-video --modalities j --out " + (dir / "out")).exit_code, 0);
+  ASSERT_EQ(
+      test::RunInhand("replay " + Session() + " --no-video --modalities j --out " + (dir / "out"))
+          .exit_code,
+      0);
   EXPECT_FALSE(fs::exists(dir / ".out.tmp-999999999"));
   EXPECT_TRUE(fs::exists(dir / (".out.tmp-" + std::to_string(::getpid()))));
 }
 
-
 // A copy of the session whose joints.csv has `value` in column `column` of sample `sample`.
 constexpr int kEverySample = -2;  // WithJoint's `sample`: every one
-std::string WithJoint(const test::TempDir& dir, const std::string& name, int sample, int column, const std::string& value) {
+std::string WithJoint(const test::TempDir& dir, const std::string& name, int sample, int column,
+                      const std::string& value) {
   fs::copy(Session(), dir / name, fs::copy_options::recursive);
   std::stringstream in(Read(dir / (name + "/joints.csv")));
   std::string out, line;
@@ -119,18 +136,23 @@ Json Summary(const std::string& replay) { return Json::parse(Read(replay + "/sum
 // finite, and the result is the clean run's but for that sample.
 TEST(Robustness, AnAbsurdJointSampleIsDroppedAndReported) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("replay " + Session() + " --no-video --modalities j,jt --out " + (dir / "clean")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("replay " + Session() + " --no-video --modalities j,jt --out " +
+                            (dir / "clean"))
+                .exit_code,
+            0);
   const Json clean = Summary(dir / "clean");
   for (const std::string value : {"1e300", "1000", "-nan"}) {
     const std::string session = WithJoint(dir, "s" + value, 1500, 3, value);
-    const test::CommandResult r = test::RunInhand("replay " + session + " --no-video --modalities j,jt --out " + (dir / ("r" + value)));
+    const test::CommandResult r = test::RunInhand(
+        "replay " + session + " --no-video --modalities j,jt --out " + (dir / ("r" + value)));
     if (value == "-nan") {  // not a number in the file: the reader rejects it with the line
       EXPECT_EQ(r.exit_code, 2) << r.output;
       EXPECT_NE(r.output.find("joints.csv:1502"), std::string::npos) << r.output;
       continue;
     }
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_NE(r.output.find("warning: " + session + "/joints.csv:1502: q:"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("warning: " + session + "/joints.csv:1502: q:"), std::string::npos)
+        << r.output;
     EXPECT_NE(r.output.find("sample dropped"), std::string::npos) << r.output;
     const Json s = Summary(dir / ("r" + value));
     EXPECT_EQ(s.at("joint_samples_rejected"), 1);
@@ -138,7 +160,9 @@ TEST(Robustness, AnAbsurdJointSampleIsDroppedAndReported) {
       const double e = s.at("modalities").at(set).at("terminal_position_error_mm").get<double>();
       EXPECT_TRUE(std::isfinite(e));
       EXPECT_EQ(s.at("modalities").at(set).at("joint_samples_dropped"), 1) << set;
-      EXPECT_NEAR(e, clean.at("modalities").at(set).at("terminal_position_error_mm").get<double>(), 1.0) << set << " " << value;
+      EXPECT_NEAR(e, clean.at("modalities").at(set).at("terminal_position_error_mm").get<double>(),
+                  1.0)
+          << set << " " << value;
     }
     EXPECT_EQ(Read(dir / ("r" + value) + "/estimates.csv").find("nan"), std::string::npos);
     EXPECT_EQ(Read(dir / ("r" + value) + "/estimates.csv").find("inf"), std::string::npos);
@@ -150,10 +174,14 @@ TEST(Robustness, AnAbsurdJointSampleIsDroppedAndReported) {
 TEST(Robustness, ASessionWithoutAFusableJointSampleIsRefused) {
   test::TempDir dir;
   const std::string session = WithJoint(dir, "s", kEverySample, 3, "1000");
-  const test::CommandResult r = test::RunInhand("replay " + session + " --no-video --modalities j --out " + (dir / "r"));
+  const test::CommandResult r =
+      test::RunInhand("replay " + session + " --no-video --modalities j --out " + (dir / "r"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find(session + "/joints.csv: none of its "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("joint samples can be fused; the first: " + session + "/joints.csv:2: q:"), std::string::npos) << r.output;
+  EXPECT_NE(
+      r.output.find("joint samples can be fused; the first: " + session + "/joints.csv:2: q:"),
+      std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(dir / "r"));
 }
 
@@ -178,30 +206,38 @@ TEST(Robustness, JointSamplesBeyondTheirLimitsAreReportedOncePerJoint) {
     out += line + "\n";
   }
   std::ofstream(dir / "s/joints.csv") << out;
-  const test::CommandResult kept = test::RunInhand("replay " + (dir / "s") + " --no-video --modalities j --out " + (dir / "kept"));
+  const test::CommandResult kept = test::RunInhand(
+      "replay " + (dir / "s") + " --no-video --modalities j --out " + (dir / "kept"));
   ASSERT_EQ(kept.exit_code, 0) << kept.output;
   const std::string flex2 = "q:index_flex2 beyond its upper limit 1.75 in ";
   EXPECT_NE(kept.output.find(flex2), std::string::npos) << kept.output;
   EXPECT_NE(kept.output.find("(worst 2.05, by 0.3)"), std::string::npos) << kept.output;
   EXPECT_EQ(kept.output.find(flex2), kept.output.rfind(flex2)) << "one line per joint";
-  EXPECT_NE(kept.output.find("q:index_abduction beyond its lower limit -0.35 in 1 of "), std::string::npos) << kept.output;
+  EXPECT_NE(kept.output.find("q:index_abduction beyond its lower limit -0.35 in 1 of "),
+            std::string::npos)
+      << kept.output;
   EXPECT_NE(kept.output.find("kept as measured"), std::string::npos) << kept.output;
   // index_flex2 rests on its lower limit early on: the encoder reads up to 0.038 rad below it,
   // within the session's joint-bias σ, and no warning says so.
-  EXPECT_EQ(kept.output.find("q:index_flex2 beyond its lower limit"), std::string::npos) << kept.output;
+  EXPECT_EQ(kept.output.find("q:index_flex2 beyond its lower limit"), std::string::npos)
+      << kept.output;
 
   dir.Write("clamp.json", R"({"joints": {"clamp_to_limits": true}})");
-  const test::CommandResult clamped = test::RunInhand("replay " + (dir / "s") + " --no-video --modalities j --params " +
-                                                      (dir / "clamp.json") + " --out " + (dir / "clamped"));
+  const test::CommandResult clamped =
+      test::RunInhand("replay " + (dir / "s") + " --no-video --modalities j --params " +
+                      (dir / "clamp.json") + " --out " + (dir / "clamped"));
   ASSERT_EQ(clamped.exit_code, 0) << clamped.output;
   EXPECT_NE(clamped.output.find("clamped to the limit"), std::string::npos) << clamped.output;
   EXPECT_NE(Read(dir / "clamped/params.json").find("\"clamp_to_limits\": true"), std::string::npos);
-  EXPECT_TRUE(Read(dir / "kept/estimates.csv") != Read(dir / "clamped/estimates.csv")) << "clamping changed nothing";
+  EXPECT_TRUE(Read(dir / "kept/estimates.csv") != Read(dir / "clamped/estimates.csv"))
+      << "clamping changed nothing";
   dir.Write("bad.json", R"({"joints": {"clamp_to_limits": 1}})");
-  const test::CommandResult bad = test::RunInhand("replay " + (dir / "s") + " --no-video --params " + (dir / "bad.json") +
-                                                  " --out " + (dir / "bad"));
+  const test::CommandResult bad =
+      test::RunInhand("replay " + (dir / "s") + " --no-video --params " + (dir / "bad.json") +
+                      " --out " + (dir / "bad"));
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(bad.output.find("'joints.clamp_to_limits' must be true or false"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("'joints.clamp_to_limits' must be true or false"), std::string::npos)
+      << bad.output;
 }
 
 // Parameters at the edge of what they were documented to accept broke the covariance; the
@@ -214,15 +250,18 @@ TEST(Robustness, ParametersThatBreakTheArithmeticAreRefused) {
            {R"({"contact_iterations": 4294967297})", "contact_iterations"},
            {R"({"features": {"max_corners": 4294967336}})", "max_corners"}}) {
     dir.Write("p.json", json);
-    const test::CommandResult r = test::RunInhand("replay " + Session() + " --no-video --params " + (dir / "p.json") + " --out " + (dir / "out"));
+    const test::CommandResult r = test::RunInhand("replay " + Session() + " --no-video --params " +
+                                                  (dir / "p.json") + " --out " + (dir / "out"));
     EXPECT_EQ(r.exit_code, 2) << json << ": " << r.output;
     EXPECT_NE(r.output.find(field), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir / "out"));
   }
   // The smallest accepted values run to a finite end with the most iterations.
-  dir.Write("edge.json", R"({"contact_sigma": 1e-5, "contact_iterations": 20, "pixel_sigma": 0.01})");
+  dir.Write("edge.json",
+            R"({"contact_sigma": 1e-5, "contact_iterations": 20, "pixel_sigma": 0.01})");
   const test::CommandResult r =
-      test::RunInhand("replay " + Session() + " --no-video --modalities j,jt,jta --params " + (dir / "edge.json") + " --out " + (dir / "edge"));
+      test::RunInhand("replay " + Session() + " --no-video --modalities j,jt,jta --params " +
+                      (dir / "edge.json") + " --out " + (dir / "edge"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Json edge = Summary(dir / "edge");
   for (const auto& [set, m] : edge.at("modalities").items()) {
@@ -236,7 +275,8 @@ TEST(Robustness, ParametersThatBreakTheArithmeticAreRefused) {
   const std::size_t at = text.find("\"sigma_position\": ") + 18;
   text.replace(at, text.find_first_of(",\n}", at) - at, "1e300");
   std::ofstream(dir / "wide/session.json") << text;
-  const test::CommandResult wide = test::RunInhand("replay " + (dir / "wide") + " --no-video --out " + (dir / "w"));
+  const test::CommandResult wide =
+      test::RunInhand("replay " + (dir / "wide") + " --no-video --out " + (dir / "w"));
   EXPECT_EQ(wide.exit_code, 2) << wide.output;
   EXPECT_NE(wide.output.find("sigma_position"), std::string::npos) << wide.output;
 }
@@ -249,22 +289,27 @@ TEST(Robustness, DeepJsonAndLongUrdfChainsAreErrorsNotCrashes) {
   const std::size_t at = text.find("\"version\": ") + 11;
   text.replace(at, 1, std::string(100000, '[') + "1" + std::string(100000, ']'));
   std::ofstream(dir / "deep/session.json") << text;
-  test::CommandResult r = test::RunInhand("replay " + (dir / "deep") + " --no-video --out " + (dir / "out"));
+  test::CommandResult r =
+      test::RunInhand("replay " + (dir / "deep") + " --no-video --out " + (dir / "out"));
   EXPECT_EQ(r.exit_code, 2) << r.output.substr(0, 300);
   EXPECT_NE(r.output.find("nested deeper than 64"), std::string::npos) << r.output.substr(0, 300);
-  dir.Write("o/object.json", R"({"format": "inhand-object", "version": 1, "name": "b", "visual": [], "collision": [{"box": [0.05, 0.02, 0.1]}], "mass": )" +
-                                std::string(100000, '[') + "0.1" + std::string(100000, ']') + "}");
+  dir.Write(
+      "o/object.json",
+      R"({"format": "inhand-object", "version": 1, "name": "b", "visual": [], "collision": [{"box": [0.05, 0.02, 0.1]}], "mass": )" +
+          std::string(100000, '[') + "0.1" + std::string(100000, ']') + "}");
   r = test::RunInhand("model " + (dir / "o/object.json"));
   EXPECT_EQ(r.exit_code, 2) << r.output.substr(0, 300);
   EXPECT_NE(r.output.find("nested deeper than 64"), std::string::npos) << r.output.substr(0, 300);
   dir.Write("deep.json", std::string(70000, '[') + std::string(70000, ']'));
-  r = test::RunInhand("replay " + Session() + " --no-video --params " + (dir / "deep.json") + " --out " + (dir / "out"));
+  r = test::RunInhand("replay " + Session() + " --no-video --params " + (dir / "deep.json") +
+                      " --out " + (dir / "out"));
   EXPECT_EQ(r.exit_code, 2) << r.output.substr(0, 300);
   // A URDF chain of 100,000 links: refused at once, no stack overflow.
   std::string urdf = "<robot name='chain'>\n<link name='l0'/>\n";
   for (int i = 1; i <= 100000; ++i)
-    urdf += "<link name='l" + std::to_string(i) + "'/><joint name='j" + std::to_string(i) + "' type='fixed'><parent link='l" +
-            std::to_string(i - 1) + "'/><child link='l" + std::to_string(i) + "'/></joint>\n";
+    urdf += "<link name='l" + std::to_string(i) + "'/><joint name='j" + std::to_string(i) +
+            "' type='fixed'><parent link='l" + std::to_string(i - 1) + "'/><child link='l" +
+            std::to_string(i) + "'/></joint>\n";
   dir.Write("chain.urdf", urdf + "</robot>\n");
   r = test::RunInhand("model " + (dir / "chain.urdf"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
@@ -272,8 +317,9 @@ TEST(Robustness, DeepJsonAndLongUrdfChainsAreErrorsNotCrashes) {
   // 900 links in a chain load (the traversal is iterative).
   urdf = "<robot name='chain'>\n<link name='l0'/>\n";
   for (int i = 1; i < 900; ++i)
-    urdf += "<link name='l" + std::to_string(i) + "'/><joint name='j" + std::to_string(i) + "' type='fixed'><parent link='l" +
-            std::to_string(i - 1) + "'/><child link='l" + std::to_string(i) + "'/></joint>\n";
+    urdf += "<link name='l" + std::to_string(i) + "'/><joint name='j" + std::to_string(i) +
+            "' type='fixed'><parent link='l" + std::to_string(i - 1) + "'/><child link='l" +
+            std::to_string(i) + "'/></joint>\n";
   dir.Write("ok.urdf", urdf + "</robot>\n");
   r = test::RunInhand("model " + (dir / "ok.urdf") + " --json");
   EXPECT_EQ(r.exit_code, 0) << r.output.substr(0, 300);
@@ -283,7 +329,10 @@ TEST(Robustness, TinyImagesGiveNoTagsNotACrash) {
   test::TempDir dir;
   for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {4, 4}, {100, 1}}) {
     const std::string file = dir / (std::to_string(w) + "x" + std::to_string(h) + ".png");
-    ASSERT_EQ(std::system(("convert -size " + std::to_string(w) + "x" + std::to_string(h) + " xc:gray " + file).c_str()), 0);
+    ASSERT_EQ(std::system(("convert -size " + std::to_string(w) + "x" + std::to_string(h) +
+                           " xc:gray " + file)
+                              .c_str()),
+              0);
     const test::CommandResult r = test::RunInhand("tags " + file + " --json");
     EXPECT_EQ(r.exit_code, 0) << file << ": " << r.output;
   }
@@ -293,33 +342,45 @@ TEST(Robustness, TinyImagesGiveNoTagsNotACrash) {
 TEST(Robustness, BadGeometryAndDuplicatesAreRefusedByName) {
   test::TempDir dir;
   const auto urdf = [&](const std::string& geometry, const std::string& extra = "") {
-    dir.Write("g.urdf", "<robot name='g'>\n<link name='base'/>\n<link name='a'><collision><geometry>" + geometry +
-                            "</geometry></collision></link>\n<joint name='j' type='revolute'><parent link='base'/><child link='a'/>"
-                            "<limit lower='0' upper='1' effort='1' velocity='1'/></joint>\n" + extra + "</robot>\n");
+    dir.Write("g.urdf",
+              "<robot name='g'>\n<link name='base'/>\n<link name='a'><collision><geometry>" +
+                  geometry +
+                  "</geometry></collision></link>\n<joint name='j' type='revolute'><parent "
+                  "link='base'/><child link='a'/>"
+                  "<limit lower='0' upper='1' effort='1' velocity='1'/></joint>\n" +
+                  extra + "</robot>\n");
     return test::RunInhand("model " + (dir / "g.urdf"));
   };
   for (const auto& [geometry, message] : std::vector<std::pair<std::string, std::string>>{
-           {"<sphere radius='-0.01'/>", "sphere radius"}, {"<cylinder radius='0.01' length='-0.022'/>", "cylinder length"},
+           {"<sphere radius='-0.01'/>", "sphere radius"},
+           {"<cylinder radius='0.01' length='-0.022'/>", "cylinder length"},
            {"<box size='0 0 0'/>", "box size"}}) {
     const test::CommandResult r = urdf(geometry);
     EXPECT_EQ(r.exit_code, 2) << geometry << ": " << r.output;
     EXPECT_NE(r.output.find(message), std::string::npos) << r.output;
   }
-  const test::CommandResult two = urdf("<sphere radius='0.01'/>", "<link name='c'/><joint name='k' type='fixed'><parent link='c'/><child link='a'/></joint>\n");
+  const test::CommandResult two = urdf(
+      "<sphere radius='0.01'/>",
+      "<link name='c'/><joint name='k' type='fixed'><parent link='c'/><child link='a'/></joint>\n");
   EXPECT_EQ(two.exit_code, 2) << two.output;
   EXPECT_NE(two.output.find("second joint"), std::string::npos) << two.output;
   // An object box with a negative size, a tag of an unknown family: named in object.json.
-  dir.Write("o/object.json", R"({"format": "inhand-object", "version": 1, "name": "b", "visual": [], "collision": [{"box": [0.05, -0.02, 0.1]}], "mass": 0.1})");
+  dir.Write(
+      "o/object.json",
+      R"({"format": "inhand-object", "version": 1, "name": "b", "visual": [], "collision": [{"box": [0.05, -0.02, 0.1]}], "mass": 0.1})");
   test::CommandResult r = test::RunInhand("model " + (dir / "o/object.json"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("object.json: field 'collision[0].box'"), std::string::npos) << r.output;
-  dir.Write("t/object.json", R"({"format": "inhand-object", "version": 1, "name": "b", "visual": [], "collision": [{"box": [0.05, 0.02, 0.1]}], "mass": 0.1,
+  dir.Write(
+      "t/object.json",
+      R"({"format": "inhand-object", "version": 1, "name": "b", "visual": [], "collision": [{"box": [0.05, 0.02, 0.1]}], "mass": 0.1,
     "tags": [{"family": "tag99h9", "id": 0, "size": 0.02, "pose": {"xyz": [0, 0, 0.05]}}]})");
   r = test::RunInhand("model " + (dir / "t/object.json"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("object.json: field 'tags[0].family'"), std::string::npos) << r.output;
   // A set named twice.
-  r = test::RunInhand("replay " + Session() + " --modalities j,j --no-video --out " + (dir / "out"));
+  r = test::RunInhand("replay " + Session() + " --modalities j,j --no-video --out " +
+                      (dir / "out"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("'j' is listed twice"), std::string::npos) << r.output;
   // A session version of 4294967297 does not read as 1.
@@ -354,19 +415,24 @@ TEST(Robustness, TimeMisalignmentIsReported) {
     std::vector<std::string> lines;
     for (std::string l; std::getline(in, l);) lines.push_back(l);
     std::string out = lines[0] + "\n";
-    for (std::size_t i = 1 + static_cast<std::size_t>(skip_front); i + static_cast<std::size_t>(skip_back) < lines.size(); ++i) out += lines[i] + "\n";
+    for (std::size_t i = 1 + static_cast<std::size_t>(skip_front);
+         i + static_cast<std::size_t>(skip_back) < lines.size(); ++i)
+      out += lines[i] + "\n";
     std::ofstream(dir / file) << out;
   };
   keep("s/joints.csv", 250, 0);
   keep("s/groundtruth.csv", 0, 250);
-  const test::CommandResult r = test::RunInhand("replay " + (dir / "s") + " --modalities j,jta --no-video --out " + (dir / "r"));
+  const test::CommandResult r = test::RunInhand(
+      "replay " + (dir / "s") + " --modalities j,jta --no-video --out " + (dir / "r"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("frames captured before the first joint sample"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frames captured before the first joint sample"), std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("groundtruth.csv: covers"), std::string::npos) << r.output;
   const Json s = Summary(dir / "r");
   EXPECT_GE(s.at("frames_before_first_sample").get<int>(), 4);
   EXPECT_GE(s.at("samples_without_truth").get<int>(), 200);
-  EXPECT_TRUE(std::isfinite(s.at("modalities").at("j").at("terminal_position_error_mm").get<double>()));
+  EXPECT_TRUE(
+      std::isfinite(s.at("modalities").at("j").at("terminal_position_error_mm").get<double>()));
 }
 
 // Clear messages that name the file.
@@ -376,7 +442,8 @@ TEST(Robustness, ImageErrorsNameTheFile) {
   const std::string frame = dir / "s/images/frame_000000.png";
   std::string png = Read(frame);
   std::ofstream(frame, std::ios::binary) << png.substr(0, png.size() / 2);  // truncated
-  test::CommandResult r = test::RunInhand("replay " + (dir / "s") + " --no-video --modalities jta --out " + (dir / "out"));
+  test::CommandResult r = test::RunInhand("replay " + (dir / "s") +
+                                          " --no-video --modalities jta --out " + (dir / "out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(r.output.find("libpng"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.rfind("inhand: error: " + frame, 0), 0u) << r.output;
@@ -384,11 +451,16 @@ TEST(Robustness, ImageErrorsNameTheFile) {
   png[16] = 0, png[17] = 0, png[18] = static_cast<char>(0xea), png[19] = 0x60;
   png[20] = 0, png[21] = 0, png[22] = static_cast<char>(0xea), png[23] = 0x60;
   std::ofstream(frame, std::ios::binary) << png;
-  r = test::RunInhand("replay " + (dir / "s") + " --no-video --modalities jta --out " + (dir / "out"));
+  r = test::RunInhand("replay " + (dir / "s") + " --no-video --modalities jta --out " +
+                      (dir / "out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find(frame + ": the PNG header says 60000x60000"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(frame + ": the PNG header says 60000x60000"), std::string::npos)
+      << r.output;
   // compare names both images and their sizes.
-  ASSERT_EQ(std::system(("convert -size 4x3 xc:gray " + (dir / "a.png") + " && convert -size 5x3 xc:gray " + (dir / "b.png")).c_str()), 0);
+  ASSERT_EQ(std::system(("convert -size 4x3 xc:gray " + (dir / "a.png") +
+                         " && convert -size 5x3 xc:gray " + (dir / "b.png"))
+                            .c_str()),
+            0);
   r = test::RunInhand("compare " + (dir / "a.png") + " " + (dir / "b.png"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find(dir / "a.png"), std::string::npos) << r.output;

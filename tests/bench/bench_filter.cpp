@@ -42,7 +42,8 @@ Scene MakeScene(const std::string& urdf, const std::string& object_file, const M
   Vec3 centroid = Vec3::Zero();
   int n = 0;
   for (std::size_t l = 0; l < s.hand.links.size(); ++l)
-    if (!s.hand.links[l].collision.empty()) centroid += kin.T_PL(static_cast<int>(l)).translation(), ++n;
+    if (!s.hand.links[l].collision.empty())
+      centroid += kin.T_PL(static_cast<int>(l)).translation(), ++n;
   centroid /= n;
   // Approach along the direction from the root towards the links' centroid.
   const Vec3 dir = centroid.norm() > 1e-6 ? Vec3(centroid.normalized()) : Vec3::UnitZ();
@@ -62,7 +63,8 @@ Scene MakeScene(const std::string& urdf, const std::string& object_file, const M
   return s;
 }
 
-void StepBenchmark(benchmark::State& state, const std::string& urdf, const std::string& object, const Mat3& R) {
+void StepBenchmark(benchmark::State& state, const std::string& urdf, const std::string& object,
+                   const Mat3& R) {
   if (!std::filesystem::exists(urdf)) {
     state.SkipWithError(("absent: " + urdf).c_str());
     return;
@@ -81,8 +83,10 @@ void StepBenchmark(benchmark::State& state, const std::string& urdf, const std::
     constraints += filter.trace().num_constraints;
     benchmark::DoNotOptimize(filter.position());
   }
-  state.counters["contacts_per_step"] = benchmark::Counter(static_cast<double>(contacts) / std::max(k, 1L));
-  state.counters["constraints_per_step"] = benchmark::Counter(static_cast<double>(constraints) / std::max(k, 1L));
+  state.counters["contacts_per_step"] =
+      benchmark::Counter(static_cast<double>(contacts) / std::max(k, 1L));
+  state.counters["constraints_per_step"] =
+      benchmark::Counter(static_cast<double>(constraints) / std::max(k, 1L));
 }
 
 const std::string kRoot = INHAND_SOURCE_DIR;
@@ -90,16 +94,28 @@ const std::string kHand = kRoot + "/assets/hands/inhand_hand/inhand_hand.urdf";
 const std::string kShared = kRoot + "/../shared/assets";
 const Mat3 kAcross = ExpSO3(Vec3(0, M_PI / 2, 0));  // a bottle lying across the palm
 
-void BM_Step_InhandHand_Ketchup(benchmark::State& s) { StepBenchmark(s, kHand, kRoot + "/assets/objects/ketchup_bottle/object.json", kAcross); }
-void BM_Step_InhandHand_Brush(benchmark::State& s) { StepBenchmark(s, kHand, kRoot + "/assets/objects/brush/object.json", Mat3::Identity()); }
-void BM_Step_InhandHand_Water(benchmark::State& s) { StepBenchmark(s, kHand, kRoot + "/assets/objects/water_bottle/object.json", kAcross); }
-void BM_Step_InhandHand_Shampoo(benchmark::State& s) { StepBenchmark(s, kHand, kRoot + "/assets/objects/shampoo_bottle/object.json", kAcross); }
-void BM_Step_InhandHand_Pen(benchmark::State& s) { StepBenchmark(s, kHand, kRoot + "/assets/objects/pen/object.json", Mat3::Identity()); }
+void BM_Step_InhandHand_Ketchup(benchmark::State& s) {
+  StepBenchmark(s, kHand, kRoot + "/assets/objects/ketchup_bottle/object.json", kAcross);
+}
+void BM_Step_InhandHand_Brush(benchmark::State& s) {
+  StepBenchmark(s, kHand, kRoot + "/assets/objects/brush/object.json", Mat3::Identity());
+}
+void BM_Step_InhandHand_Water(benchmark::State& s) {
+  StepBenchmark(s, kHand, kRoot + "/assets/objects/water_bottle/object.json", kAcross);
+}
+void BM_Step_InhandHand_Shampoo(benchmark::State& s) {
+  StepBenchmark(s, kHand, kRoot + "/assets/objects/shampoo_bottle/object.json", kAcross);
+}
+void BM_Step_InhandHand_Pen(benchmark::State& s) {
+  StepBenchmark(s, kHand, kRoot + "/assets/objects/pen/object.json", Mat3::Identity());
+}
 void BM_Step_Allegro_Ketchup(benchmark::State& s) {
-  StepBenchmark(s, kShared + "/hands/allegro_hand/allegro_hand_right.urdf", kRoot + "/assets/objects/ketchup_bottle/object.json", kAcross);
+  StepBenchmark(s, kShared + "/hands/allegro_hand/allegro_hand_right.urdf",
+                kRoot + "/assets/objects/ketchup_bottle/object.json", kAcross);
 }
 void BM_Step_Allegro_YcbMustard(benchmark::State& s) {
-  StepBenchmark(s, kShared + "/hands/allegro_hand/allegro_hand_right.urdf", kShared + "/objects/ycb/mustard_bottle.urdf", Mat3::Identity());
+  StepBenchmark(s, kShared + "/hands/allegro_hand/allegro_hand_right.urdf",
+                kShared + "/objects/ycb/mustard_bottle.urdf", Mat3::Identity());
 }
 
 BENCHMARK(BM_Step_InhandHand_Ketchup)->Unit(benchmark::kMicrosecond);
@@ -112,4 +128,3 @@ BENCHMARK(BM_Step_Allegro_YcbMustard)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace inhand
-

@@ -32,8 +32,10 @@ std::vector<std::uint8_t> Picture(int f, std::mt19937& rng) {
     for (int x = 0; x < 640; ++x) {
       const bool inside = std::hypot(x - 320 - 3 * f, y - 240) < 120;
       for (int c = 0; c < 3; ++c) {
-        const double v = (inside ? 180 : 60) + 40 * std::sin(0.01 * x + c) + 30 * std::cos(0.013 * y) + noise(rng);
-        data[(static_cast<std::size_t>(y) * 640 + x) * 3 + c] = static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
+        const double v = (inside ? 180 : 60) + 40 * std::sin(0.01 * x + c) +
+                         30 * std::cos(0.013 * y) + noise(rng);
+        data[(static_cast<std::size_t>(y) * 640 + x) * 3 + c] =
+            static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
       }
     }
   return data;
@@ -50,7 +52,9 @@ struct TempFile {
 
 const std::string& Recording() {
   static const TempFile file{[] {
-    const std::string p = (std::filesystem::temp_directory_path() / ("inhand-bench-import-" + std::to_string(::getpid()) + ".bag")).string();
+    const std::string p = (std::filesystem::temp_directory_path() /
+                           ("inhand-bench-import-" + std::to_string(::getpid()) + ".bag"))
+                              .string();
     const std::vector<std::string> names = inhand::LoadHandModel(kHand, {{}, false}).QNames();
     rosbag::Bag bag(p, rosbag::bagmode::Write);
     const ros::Time base(1700000000, 0);
@@ -58,9 +62,12 @@ const std::string& Recording() {
     for (int k = 0; k < static_cast<int>(kSeconds * 500); ++k) {
       sensor_msgs::JointState m;
       m.header.stamp = base + ros::Duration(k * 0.002);
-      for (int a = 0; a < 7; ++a) m.name.push_back("arm_" + std::to_string(a)), m.position.push_back(0.1 * a), m.effort.push_back(1.0);
+      for (int a = 0; a < 7; ++a)
+        m.name.push_back("arm_" + std::to_string(a)), m.position.push_back(0.1 * a),
+            m.effort.push_back(1.0);
       for (std::size_t j = 0; j < names.size(); ++j)
-        m.name.push_back(names[j]), m.position.push_back(0.2 + 0.1 * std::sin(0.01 * k + j)), m.effort.push_back(0.05 * j);
+        m.name.push_back(names[j]), m.position.push_back(0.2 + 0.1 * std::sin(0.01 * k + j)),
+            m.effort.push_back(0.05 * j);
       bag.write("/joint_states", m.header.stamp, m);
       if (k % 5 == 0) {
         tf2_msgs::TFMessage tf;
@@ -94,7 +101,9 @@ const std::string& Recording() {
 }
 
 void BM_Import_Ros1Bag_10s_500HzJoints_30Hz640x480(benchmark::State& state) {
-  const std::string out = (std::filesystem::temp_directory_path() / ("inhand-bench-import-session-" + std::to_string(::getpid()))).string();
+  const std::string out = (std::filesystem::temp_directory_path() /
+                           ("inhand-bench-import-session-" + std::to_string(::getpid())))
+                              .string();
   inhand::ros::ImportOptions o;
   o.recording = Recording();
   o.out = out;
@@ -107,7 +116,8 @@ void BM_Import_Ros1Bag_10s_500HzJoints_30Hz640x480(benchmark::State& state) {
   for (auto _ : state) frames = inhand::ros::ImportRecording(o).frames;
   state.counters["frames"] = static_cast<double>(frames);
   // Recorded seconds per wall second (the target is >= 20).
-  state.counters["x_real_time"] = benchmark::Counter(kSeconds * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["x_real_time"] = benchmark::Counter(
+      kSeconds * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   std::filesystem::remove_all(out);
 }
 
@@ -117,10 +127,14 @@ void BM_EncodePng_640x480(benchmark::State& state) {
   const std::vector<std::uint8_t> pixels = Picture(0, rng);
   std::size_t bytes = 0;
   for (auto _ : state) bytes = inhand::EncodePng(pixels.data(), 640, 480, 3, 640 * 3).size();
-  state.counters["compressed_fraction"] = static_cast<double>(bytes) / static_cast<double>(pixels.size());
+  state.counters["compressed_fraction"] =
+      static_cast<double>(bytes) / static_cast<double>(pixels.size());
 }
 
 }  // namespace
 
 BENCHMARK(BM_EncodePng_640x480)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Import_Ros1Bag_10s_500HzJoints_30Hz640x480)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
+BENCHMARK(BM_Import_Ros1Bag_10s_500HzJoints_30Hz640x480)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(2);

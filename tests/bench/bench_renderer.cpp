@@ -27,7 +27,8 @@ struct RenderScene {
     scene.background = Vec3(0.8, 0.8, 0.8);
     scene.T_PC = LookAt(Vec3(0.15, -0.1, 0.3), Vec3(0, 0.05, 0.03), Vec3::UnitY());
     AddHand(scene, UploadHand(renderer, hand), kin.link_poses());
-    AddObject(scene, UploadObject(renderer, object), MakeTransform(Vec3(0, 0.05, 0.045), ExpSO3(Vec3(0, M_PI / 2, 0))));
+    AddObject(scene, UploadObject(renderer, object),
+              MakeTransform(Vec3(0, 0.05, 0.045), ExpSO3(Vec3(0, M_PI / 2, 0))));
   }
 };
 
@@ -45,24 +46,32 @@ void Render(benchmark::State& state, const std::string& object, bool depth) {
   }
 }
 
-void BM_Render640_HandKetchup_ColourDepthLabels(benchmark::State& s) { Render(s, kRoot + "/assets/objects/ketchup_bottle/object.json", true); }
-void BM_Render640_HandKetchup_ColourOnly(benchmark::State& s) { Render(s, kRoot + "/assets/objects/ketchup_bottle/object.json", false); }
+void BM_Render640_HandKetchup_ColourDepthLabels(benchmark::State& s) {
+  Render(s, kRoot + "/assets/objects/ketchup_bottle/object.json", true);
+}
+void BM_Render640_HandKetchup_ColourOnly(benchmark::State& s) {
+  Render(s, kRoot + "/assets/objects/ketchup_bottle/object.json", false);
+}
 void BM_Render640_HandYcbMustard16k_ColourDepthLabels(benchmark::State& s) {
   Render(s, kRoot + "/../shared/assets/objects/ycb/mustard_bottle.urdf", true);
 }
 BENCHMARK(BM_Render640_HandKetchup_ColourDepthLabels)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Render640_HandKetchup_ColourOnly)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_Render640_HandYcbMustard16k_ColourDepthLabels)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Render640_HandYcbMustard16k_ColourDepthLabels)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // `tiles` rendered 640x480 views side by side (the replay layout has three).
 void VideoEncode(benchmark::State& state, int tiles) {
-  const std::string path = (std::filesystem::temp_directory_path() / "inhand_bench_video.mp4").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "inhand_bench_video.mp4").string();
   RenderScene s(kRoot + "/assets/objects/ketchup_bottle/object.json");
   RenderOutput out;
   s.renderer.Render(s.scene, out, false);
   Image8 frame(640 * tiles, 480, 3);
   for (int y = 0; y < 480; ++y)
-    for (int k = 0; k < tiles; ++k) std::copy_n(out.colour.pixel(0, y), 640 * 3, frame.pixel(640 * k, y));
+    for (int k = 0; k < tiles; ++k)
+      std::copy_n(out.colour.pixel(0, y), 640 * 3, frame.pixel(640 * k, y));
   VideoWriter writer(path, 30.0, frame.width, frame.height);
   int i = 0;
   for (auto _ : state) {
@@ -120,7 +129,9 @@ void BM_ExtractedFeatureStep640(benchmark::State& state) {
   s.renderer.Render(s.scene, real, false);
   Scene shifted = s.scene;
   for (SceneItem& item : shifted.items)
-    if (item.label == kObjectLabel) item.T_PM = MakeTransform(Vec3(0.004, -0.002, 0.0), ExpSO3(Vec3(0.02, 0.0, 0.01))) * item.T_PM;
+    if (item.label == kObjectLabel)
+      item.T_PM =
+          MakeTransform(Vec3(0.004, -0.002, 0.0), ExpSO3(Vec3(0.02, 0.0, 0.01))) * item.T_PM;
   RenderOutput virt;
   std::vector<std::uint8_t> mask;
   int inliers = 0;
@@ -128,7 +139,8 @@ void BM_ExtractedFeatureStep640(benchmark::State& state) {
     s.renderer.Render(shifted, virt, true);
     mask.resize(virt.label.size());
     for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = virt.label[i] == kObjectLabel;
-    inliers = MatchFeatures(real.colour, virt.colour, &mask, FeatureParams(), nullptr, false).num_inliers();  // as the tracker: no debug-only camera corners
+    inliers = MatchFeatures(real.colour, virt.colour, &mask, FeatureParams(), nullptr, false)
+                  .num_inliers();  // as the tracker: no debug-only camera corners
   }
   state.counters["inliers"] = inliers;
 }
@@ -142,7 +154,8 @@ void BM_MatchFeatures640_GlobalSearch90(benchmark::State& state) {
   s.renderer.Render(s.scene, real, false);
   Scene shifted = s.scene;
   for (SceneItem& item : shifted.items)
-    if (item.label == kObjectLabel) item.T_PM = MakeTransform(Vec3(0.012, -0.006, 0.0), Mat3::Identity()) * item.T_PM;
+    if (item.label == kObjectLabel)
+      item.T_PM = MakeTransform(Vec3(0.012, -0.006, 0.0), Mat3::Identity()) * item.T_PM;
   s.renderer.Render(shifted, virt, true);
   std::vector<std::uint8_t> mask(virt.label.size());
   for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = virt.label[i] == kObjectLabel;

@@ -56,7 +56,8 @@ void Replay(benchmark::State& state, const std::string& modalities, bool video, 
     std::streambuf* cout = std::cout.rdbuf(nullptr);  // the replay's summary lines
     app::RunReplay(cmd);
     std::cout.rdbuf(cout);
-    factors.push_back(duration / std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    factors.push_back(
+        duration / std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   fs::remove_all(cmd.out);
   std::sort(factors.begin(), factors.end());
@@ -72,9 +73,15 @@ void BM_Replay_AllSets_NoVideo_JobsCores(benchmark::State& s) { Replay(s, "", fa
 void BM_Replay_JJt_NoVideo_Jobs1(benchmark::State& s) { Replay(s, "j,jt", false, 1); }
 void BM_Replay_JJt_NoVideo_JobsCores(benchmark::State& s) { Replay(s, "j,jt", false, Cores()); }
 BENCHMARK(BM_Replay_AllSets_Video_Jobs1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
-BENCHMARK(BM_Replay_AllSets_Video_JobsCores)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_Replay_AllSets_Video_JobsCores)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
 BENCHMARK(BM_Replay_AllSets_NoVideo_Jobs1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
-BENCHMARK(BM_Replay_AllSets_NoVideo_JobsCores)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_Replay_AllSets_NoVideo_JobsCores)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
 BENCHMARK(BM_Replay_JJt_NoVideo_Jobs1)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_Replay_JJt_NoVideo_JobsCores)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
@@ -90,7 +97,8 @@ struct Played {
   Played() {
     for (int k = 0; k < session.num_samples(); ++k) {
       player.Step(k);
-      if (player.last_frame() >= 0) pictures.push_back(app::FrameComposer::Capture(player, player.last_frame(), session.t(k)));
+      if (player.last_frame() >= 0)
+        pictures.push_back(app::FrameComposer::Capture(player, player.last_frame(), session.t(k)));
     }
   }
 };
@@ -117,7 +125,8 @@ void BM_ComposeFrame1920x480_NoEncoding(benchmark::State& state) {
   const std::vector<app::PictureState>& pictures = played.pictures;
   app::FrameComposer composer(played.player);
   std::size_t i = 0;
-  for (auto _ : state) benchmark::DoNotOptimize(composer.Compose(pictures[i++ % pictures.size()]).data.data());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(composer.Compose(pictures[i++ % pictures.size()]).data.data());
 }
 BENCHMARK(BM_ComposeFrame1920x480_NoEncoding)->Unit(benchmark::kMillisecond)->UseRealTime();
 

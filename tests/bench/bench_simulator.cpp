@@ -1,7 +1,7 @@
 // Simulator target (issue 5): every scenario, with its camera images, simulates in less than 3x
 // its own duration; with the realistic camera too (issue 16: its own light, shadows, motion blur
-// sub-frames, lens, sensor and JPEG). One full simulation per iteration; the counter `x_real_time` is wall time
-// over simulated time (read its median from `make bench`).
+// sub-frames, lens, sensor and JPEG). One full simulation per iteration; the counter `x_real_time`
+// is wall time over simulated time (read its median from `make bench`).
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
@@ -13,7 +13,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void Simulation(benchmark::State& state, const std::string& scenario, NoiseProfile noise = NoiseProfile::kPaper) {
+void Simulation(benchmark::State& state, const std::string& scenario,
+                NoiseProfile noise = NoiseProfile::kPaper) {
   const fs::path dir = fs::temp_directory_path() / ("inhand_bench_sim_" + scenario);
   double wall = 0.0, simulated = 0.0;
   for (auto _ : state) {
@@ -35,11 +36,21 @@ void BM_Simulate_Brush(benchmark::State& s) { Simulation(s, "brush-rotation"); }
 void BM_Simulate_Water(benchmark::State& s) { Simulation(s, "water-push-grasp"); }
 void BM_Simulate_Shampoo(benchmark::State& s) { Simulation(s, "shampoo-grasp"); }
 void BM_Simulate_Pen(benchmark::State& s) { Simulation(s, "pen-fingertip"); }
-void BM_SimulateRealistic_Ketchup(benchmark::State& s) { Simulation(s, "ketchup-power-grasp", NoiseProfile::kRealistic); }
-void BM_SimulateRealistic_Brush(benchmark::State& s) { Simulation(s, "brush-rotation", NoiseProfile::kRealistic); }
-void BM_SimulateRealistic_Water(benchmark::State& s) { Simulation(s, "water-push-grasp", NoiseProfile::kRealistic); }
-void BM_SimulateRealistic_Shampoo(benchmark::State& s) { Simulation(s, "shampoo-grasp", NoiseProfile::kRealistic); }
-void BM_SimulateRealistic_Pen(benchmark::State& s) { Simulation(s, "pen-fingertip", NoiseProfile::kRealistic); }
+void BM_SimulateRealistic_Ketchup(benchmark::State& s) {
+  Simulation(s, "ketchup-power-grasp", NoiseProfile::kRealistic);
+}
+void BM_SimulateRealistic_Brush(benchmark::State& s) {
+  Simulation(s, "brush-rotation", NoiseProfile::kRealistic);
+}
+void BM_SimulateRealistic_Water(benchmark::State& s) {
+  Simulation(s, "water-push-grasp", NoiseProfile::kRealistic);
+}
+void BM_SimulateRealistic_Shampoo(benchmark::State& s) {
+  Simulation(s, "shampoo-grasp", NoiseProfile::kRealistic);
+}
+void BM_SimulateRealistic_Pen(benchmark::State& s) {
+  Simulation(s, "pen-fingertip", NoiseProfile::kRealistic);
+}
 BENCHMARK(BM_Simulate_Ketchup)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_Simulate_Brush)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_Simulate_Water)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);

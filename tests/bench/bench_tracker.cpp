@@ -42,7 +42,8 @@ struct Recorded {
     Session s = Session::Load(dir.string());
     SessionModels m = LoadSessionModels(s, true);
     std::vector<Image8> images;
-    for (std::size_t f = 0; f < s.camera_frames().size(); ++f) images.push_back(s.LoadImage(static_cast<int>(f)));
+    for (std::size_t f = 0; f < s.camera_frames().size(); ++f)
+      images.push_back(s.LoadImage(static_cast<int>(f)));
     return {std::move(s), std::move(m), std::move(images)};
   }
 };
@@ -56,7 +57,8 @@ void JointLatency(benchmark::State& state, bool threaded) {
   for (auto _ : state) {
     TrackerOptions options;
     options.threaded = threaded;
-    Tracker tracker(r.models.hand, r.models.object, Modalities{true, false, true}, TrackerParams(), options);
+    Tracker tracker(r.models.hand, r.models.object, Modalities{true, false, true}, TrackerParams(),
+                    options);
     tracker.Start(s.t(0), s.info().initial_T_PO);
     Eigen::VectorXd q(r.models.hand.num_q()), tau(r.models.hand.num_q());
     const auto wall0 = std::chrono::steady_clock::now();
@@ -77,7 +79,9 @@ void JointLatency(benchmark::State& state, bool threaded) {
         tracker.AddImage(t, r.images[frame], frames[frame].T_PC, *s.info().camera);
         next_image += 1.0 / 30.0;
       }
-      const double us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
+      const double us =
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start)
+              .count();
       if (k > 0) latency.push_back(us);  // the first sample sizes the history once
       if (us > 2000) std::fprintf(stderr, "slow sample %d: %.0f us\n", k, us);
     }
@@ -85,20 +89,35 @@ void JointLatency(benchmark::State& state, bool threaded) {
     stats = tracker.stats();
   }
   std::sort(latency.begin(), latency.end());
-  const auto at = [&](double p) { return latency[std::min(latency.size() - 1, static_cast<std::size_t>(p * static_cast<double>(latency.size())))]; };
+  const auto at = [&](double p) {
+    return latency[std::min(latency.size() - 1,
+                            static_cast<std::size_t>(p * static_cast<double>(latency.size())))];
+  };
   state.counters["p50_us"] = at(0.5);
   state.counters["p99_us"] = at(0.99);
   state.counters["max_us"] = latency.back();
   state.counters["images_fused"] = static_cast<double>(stats.images_fused);
   state.counters["images_dropped_busy"] = static_cast<double>(stats.images_dropped_busy);
   state.counters["samples_replayed_per_image"] =
-      stats.images_fused ? static_cast<double>(stats.samples_replayed) / static_cast<double>(stats.images_fused) : 0.0;
+      stats.images_fused
+          ? static_cast<double>(stats.samples_replayed) / static_cast<double>(stats.images_fused)
+          : 0.0;
 }
 
-void BM_Tracker_JointLatency_500Hz_Features30Hz_Threaded(benchmark::State& s) { JointLatency(s, true); }
-void BM_Tracker_JointLatency_500Hz_Features30Hz_Deterministic(benchmark::State& s) { JointLatency(s, false); }
-BENCHMARK(BM_Tracker_JointLatency_500Hz_Features30Hz_Threaded)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
-BENCHMARK(BM_Tracker_JointLatency_500Hz_Features30Hz_Deterministic)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+void BM_Tracker_JointLatency_500Hz_Features30Hz_Threaded(benchmark::State& s) {
+  JointLatency(s, true);
+}
+void BM_Tracker_JointLatency_500Hz_Features30Hz_Deterministic(benchmark::State& s) {
+  JointLatency(s, false);
+}
+BENCHMARK(BM_Tracker_JointLatency_500Hz_Features30Hz_Threaded)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+BENCHMARK(BM_Tracker_JointLatency_500Hz_Features30Hz_Deterministic)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
 
 }  // namespace
 }  // namespace inhand

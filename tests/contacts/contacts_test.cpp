@@ -38,15 +38,19 @@ struct Fixture {
   int link(const char* name) const { return hand.LinkIndex(name); }
 };
 
-Transform At(double x, double y, double z) { return MakeTransform(Vec3(x, y, z), Mat3::Identity()); }
+Transform At(double x, double y, double z) {
+  return MakeTransform(Vec3(x, y, z), Mat3::Identity());
+}
 
 Transform RandomPose(double spread) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   auto& rng = test::Rng();
-  return MakeTransform(Vec3(u(rng), u(rng), u(rng)) * spread, ExpSO3(Vec3(u(rng), u(rng), u(rng)) * 3.0));
+  return MakeTransform(Vec3(u(rng), u(rng), u(rng)) * spread,
+                       ExpSO3(Vec3(u(rng), u(rng), u(rng)) * 3.0));
 }
 
-void ExpectPair(const ContactPair& p, double d, const Vec3& c_f, const Vec3& c_o, const Vec3& n, double tol = 1e-9) {
+void ExpectPair(const ContactPair& p, double d, const Vec3& c_f, const Vec3& c_o, const Vec3& n,
+                double tol = 1e-9) {
   EXPECT_NEAR(p.distance, d, tol);
   EXPECT_LT((p.c_f_P - c_f).norm(), 10 * tol) << p.c_f_P.transpose();
   EXPECT_LT((p.c_o_P - c_o).norm(), 10 * tol) << p.c_o_P.transpose();
@@ -59,18 +63,19 @@ TEST(Contacts, SphereAgainstBoxSeparatedAndPenetrating) {
   ExpectPair(f.query.QueryPair(f.link("sphere"), 0, 0, Transform::Identity(), At(0.07, 0, 0)), 0.01,
              Vec3(0.01, 0, 0), Vec3(0.02, 0, 0), Vec3(1, 0, 0));
   // Penetrating by 5 mm: c_f is the sphere's deepest point, c_o on the face.
-  ExpectPair(f.query.QueryPair(f.link("sphere"), 0, 0, Transform::Identity(), At(0.055, 0, 0)), -0.005,
-             Vec3(0.01, 0, 0), Vec3(0.005, 0, 0), Vec3(1, 0, 0));
+  ExpectPair(f.query.QueryPair(f.link("sphere"), 0, 0, Transform::Identity(), At(0.055, 0, 0)),
+             -0.005, Vec3(0.01, 0, 0), Vec3(0.005, 0, 0), Vec3(1, 0, 0));
   // The same from below: normal flips.
-  ExpectPair(f.query.QueryPair(f.link("sphere"), 0, 0, Transform::Identity(), At(0, 0, -0.058)), -0.002,
-             Vec3(0, 0, -0.01), Vec3(0, 0, -0.008), Vec3(0, 0, -1));
+  ExpectPair(f.query.QueryPair(f.link("sphere"), 0, 0, Transform::Identity(), At(0, 0, -0.058)),
+             -0.002, Vec3(0, 0, -0.01), Vec3(0, 0, -0.008), Vec3(0, 0, -1));
 }
 
 TEST(Contacts, CoplanarBoxFacesAreExact) {
   Fixture f;
   // Link box (half 10 mm) and object box (half 50 mm), faces parallel: EPA's hard case.
   for (double gap : {0.003, 0.0, -0.0005, -0.004}) {
-    const ContactPair p = f.query.QueryPair(f.link("box"), 0, 0, Transform::Identity(), At(0.06 + gap, 0.01, -0.02));
+    const ContactPair p =
+        f.query.QueryPair(f.link("box"), 0, 0, Transform::Identity(), At(0.06 + gap, 0.01, -0.02));
     EXPECT_NEAR(p.distance, gap, 1e-9) << gap;
     EXPECT_NEAR(p.c_f_P.x(), 0.01, 1e-9) << gap;
     EXPECT_NEAR(p.c_o_P.x(), 0.01 + gap, 1e-9) << gap;
@@ -82,10 +87,11 @@ TEST(Contacts, CapsuleMergedAndAnalytic) {
   Fixture f;
   ASSERT_EQ(f.hand.links[f.link("capsule")].collision.size(), 1u);
   // Sphere object (r = 10 mm) beside the capsule's straight part, then beyond its end cap.
-  ExpectPair(f.query.QueryPair(f.link("capsule"), 0, 1, Transform::Identity(), At(0.03, 0, 0.01)), 0.015,
-             Vec3(0.005, 0, 0.01), Vec3(0.02, 0, 0.01), Vec3(1, 0, 0));
+  ExpectPair(f.query.QueryPair(f.link("capsule"), 0, 1, Transform::Identity(), At(0.03, 0, 0.01)),
+             0.015, Vec3(0.005, 0, 0.01), Vec3(0.02, 0, 0.01), Vec3(1, 0, 0));
   const Vec3 dir = Vec3(0.0, 0.03, 0.03).normalized();
-  const ContactPair end = f.query.QueryPair(f.link("capsule"), 0, 1, Transform::Identity(), At(0, 0.03, 0.05));
+  const ContactPair end =
+      f.query.QueryPair(f.link("capsule"), 0, 1, Transform::Identity(), At(0, 0.03, 0.05));
   EXPECT_NEAR(end.distance, std::sqrt(2.0) * 0.03 - 0.015, 1e-9);
   EXPECT_LT((end.normal_P - dir).norm(), 1e-6);
 }
@@ -122,8 +128,10 @@ TEST(Contacts, DistanceIsInvariantUnderMovingTheWholeScene) {
 }
 
 TEST(Contacts, BroadPhaseNeverDropsAPenetratingPair) {
-  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
-  const ObjectModel object = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  const HandModel hand =
+      LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  const ObjectModel object =
+      LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
   BulletContactQuery query(hand, object);
   KinematicsData kin(hand);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -137,8 +145,10 @@ TEST(Contacts, BroadPhaseNeverDropsAPenetratingPair) {
     }
     kin.Update(hand, q);
     // The bottle lying across the palm, somewhere the fingers reach.
-    const Transform T_PO = MakeTransform(Vec3(-0.08 + 0.16 * u(test::Rng()), 0.02 + 0.1 * u(test::Rng()), 0.02 + 0.04 * u(test::Rng())),
-                                         ExpSO3(Vec3(0, M_PI / 2, 0) + 0.5 * Vec3(u(test::Rng()), u(test::Rng()), u(test::Rng()))));
+    const Transform T_PO = MakeTransform(
+        Vec3(-0.08 + 0.16 * u(test::Rng()), 0.02 + 0.1 * u(test::Rng()),
+             0.02 + 0.04 * u(test::Rng())),
+        ExpSO3(Vec3(0, M_PI / 2, 0) + 0.5 * Vec3(u(test::Rng()), u(test::Rng()), u(test::Rng()))));
     query.Query(kin.link_poses(), T_PO, 0.015, fast);
     query.QueryExhaustive(kin.link_poses(), T_PO, 0.015, slow);
     ASSERT_EQ(fast.size(), slow.size());
@@ -153,7 +163,8 @@ TEST(Contacts, BroadPhaseNeverDropsAPenetratingPair) {
 }
 
 TEST(Contacts, QueryAllocatesNothingAfterWarmUp) {
-  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  const HandModel hand =
+      LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
   const ObjectModel object = LoadObjectModel(test::ProjectAsset("objects/brush/object.json"));
   BulletContactQuery query(hand, object);
   KinematicsData kin(hand);

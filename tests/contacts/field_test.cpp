@@ -29,7 +29,8 @@ struct MeshOracle {
 
   explicit MeshOracle(const std::vector<const TriangleMesh*>& meshes) {
     for (const TriangleMesh* m : meshes)
-      for (const auto& t : m->triangles) tris.push_back({m->vertices[t[0]], m->vertices[t[1]], m->vertices[t[2]]});
+      for (const auto& t : m->triangles)
+        tris.push_back({m->vertices[t[0]], m->vertices[t[1]], m->vertices[t[2]]});
   }
 
   double Winding(const Vec3& p) const {
@@ -70,7 +71,8 @@ constexpr const char* kProbes = R"(<robot name="probes">
 
 HandModel ProbeHand(double tip_radius) {
   HandModel hand = ParseHandModel(kProbes, ".", "probes.urdf");
-  hand.links[static_cast<std::size_t>(hand.LinkIndex("tip"))].collision = {ConvexPiece::Sphere(tip_radius, Transform::Identity())};
+  hand.links[static_cast<std::size_t>(hand.LinkIndex("tip"))].collision = {
+      ConvexPiece::Sphere(tip_radius, Transform::Identity())};
   // Capsule along the link's z: half-length 10 mm, radius 6 mm.
   hand.links[static_cast<std::size_t>(hand.LinkIndex("phalanx"))].collision = {
       ConvexPiece::Capsule(0.006, 0.010, Transform::Identity())};
@@ -80,7 +82,7 @@ HandModel ProbeHand(double tip_radius) {
 // The exact answer for one probe placed at `T_PL` against the object at the origin.
 struct Exact {
   double distance;
-  Vec3 normal;      // outward, object frame
+  Vec3 normal;          // outward, object frame
   bool normal_defined;  // false near the medial axis (the exact normal turns by more than 10
                         // degrees within 1.5 mm: 1.5 grid steps, where no grid can resolve it)
 };
@@ -89,8 +91,8 @@ Exact ExactSphere(const MeshOracle& oracle, const Vec3& centre, double radius) {
   Exact e;
   e.distance = oracle.Signed(centre, &e.normal) - radius;
   e.normal_defined = true;
-  for (const Vec3& step : {Vec3(1.5e-3, 0, 0), Vec3(0, 1.5e-3, 0), Vec3(0, 0, 1.5e-3), Vec3(-1.5e-3, 0, 0),
-                           Vec3(0, -1.5e-3, 0), Vec3(0, 0, -1.5e-3)}) {
+  for (const Vec3& step : {Vec3(1.5e-3, 0, 0), Vec3(0, 1.5e-3, 0), Vec3(0, 0, 1.5e-3),
+                           Vec3(-1.5e-3, 0, 0), Vec3(0, -1.5e-3, 0), Vec3(0, 0, -1.5e-3)}) {
     Vec3 n;
     oracle.Signed(centre + step, &n);
     if (n.dot(e.normal) < std::cos(10.0 * M_PI / 180.0)) e.normal_defined = false;
@@ -123,8 +125,8 @@ struct Sweep {
 
 // Pushes link `link` of `hand` from `start` along `dir` (steps of `step`), returning the query's
 // distance and the exact one at each position.
-Sweep Push(const HandModel& hand, const ObjectModel& object, const MeshOracle& oracle, const char* link,
-           const Vec3& start, const Vec3& dir, double step, int steps) {
+Sweep Push(const HandModel& hand, const ObjectModel& object, const MeshOracle& oracle,
+           const char* link, const Vec3& start, const Vec3& dir, double step, int steps) {
   BulletContactQuery query(hand, object);
   const int l = hand.LinkIndex(link);
   const ConvexPiece& piece = hand.links[static_cast<std::size_t>(l)].collision[0];
@@ -132,7 +134,8 @@ Sweep Push(const HandModel& hand, const ObjectModel& object, const MeshOracle& o
   std::vector<ContactPair> pairs;
   for (int k = 0; k < steps; ++k) {
     const Vec3 c = start + dir * (k * step);
-    std::vector<Transform> T_PL(hand.links.size(), MakeTransform(Vec3(10, 10, 10), Mat3::Identity()));
+    std::vector<Transform> T_PL(hand.links.size(),
+                                MakeTransform(Vec3(10, 10, 10), Mat3::Identity()));
     T_PL[static_cast<std::size_t>(l)] = MakeTransform(c, Mat3::Identity());
     query.Query(T_PL, Transform::Identity(), 0.05, pairs);
     ContactPair got;
@@ -141,11 +144,13 @@ Sweep Push(const HandModel& hand, const ObjectModel& object, const MeshOracle& o
       if (p.link == l) got = p;
     const Exact e = piece.kind == ConvexPiece::Kind::kSphere
                         ? ExactSphere(oracle, c, piece.radius)
-                        : ExactCapsule(oracle, c + Vec3(0, 0, -piece.half_length), c + Vec3(0, 0, piece.half_length), piece.radius);
+                        : ExactCapsule(oracle, c + Vec3(0, 0, -piece.half_length),
+                                       c + Vec3(0, 0, piece.half_length), piece.radius);
     s.measured.push_back(got.distance);
     s.exact.push_back(e.distance);
     // The query's normal points from the link into the object: the exact outward normal, negated.
-    s.angle_deg.push_back(std::acos(std::clamp(-got.normal_P.dot(e.normal), -1.0, 1.0)) * 180.0 / M_PI);
+    s.angle_deg.push_back(std::acos(std::clamp(-got.normal_P.dot(e.normal), -1.0, 1.0)) * 180.0 /
+                          M_PI);
     s.normal_checked.push_back(e.normal_defined);
   }
   return s;
@@ -156,8 +161,8 @@ constexpr double kContactRange = 0.01;
 
 // Returns {steps compared, normals checked}; `min_normal_share` of the compared steps must have a
 // checkable normal.
-std::array<int, 2> ExpectSweep(const Sweep& s, const std::string& what, double min_normal_share = 0.5,
-                              double tolerance = 1e-3) {
+std::array<int, 2> ExpectSweep(const Sweep& s, const std::string& what,
+                               double min_normal_share = 0.5, double tolerance = 1e-3) {
   int normals = 0;
   int compared = 0;
   for (std::size_t k = 0; k < s.measured.size(); ++k) {
@@ -169,7 +174,8 @@ std::array<int, 2> ExpectSweep(const Sweep& s, const std::string& what, double m
     ++compared;
     EXPECT_NEAR(s.measured[k], s.exact[k], tolerance) << what << " step " << k;
     if (k > 0) {
-      EXPECT_LE(s.measured[k], s.measured[k - 1] + 1e-5) << what << ": depth not monotonic at step " << k;
+      EXPECT_LE(s.measured[k], s.measured[k - 1] + 1e-5)
+          << what << ": depth not monotonic at step " << k;
     }
     if (s.normal_checked[k]) {
       ++normals;
@@ -179,10 +185,12 @@ std::array<int, 2> ExpectSweep(const Sweep& s, const std::string& what, double m
   EXPECT_GE(compared, 3) << what;
   std::string table;
   for (std::size_t k = 0; k < s.measured.size(); ++k)
-    table += "\n  step " + std::to_string(k) + ": " + std::to_string(s.measured[k] * 1e3) + " mm, exact " +
-             std::to_string(s.exact[k] * 1e3) + " mm, normal off by " + std::to_string(s.angle_deg[k]) +
+    table += "\n  step " + std::to_string(k) + ": " + std::to_string(s.measured[k] * 1e3) +
+             " mm, exact " + std::to_string(s.exact[k] * 1e3) + " mm, normal off by " +
+             std::to_string(s.angle_deg[k]) +
              (s.normal_checked[k] ? " deg" : " deg (near the medial axis)");
-  EXPECT_GE(normals, std::max(1, static_cast<int>(min_normal_share * compared))) << what << ": too few steps away from the medial axis" << table;
+  EXPECT_GE(normals, std::max(1, static_cast<int>(min_normal_share * compared)))
+      << what << ": too few steps away from the medial axis" << table;
   return {compared, normals};
 }
 
@@ -206,7 +214,8 @@ struct Prism {
     std::vector<std::array<double, 2>> bx, by, bz;
     auto ranges = [](int k, double half) {
       std::vector<std::array<double, 2>> r;
-      for (int i = 0; i < k; ++i) r.push_back({-half + 2.0 * half * i / k, -half + 2.0 * half * (i + 1) / k});
+      for (int i = 0; i < k; ++i)
+        r.push_back({-half + 2.0 * half * i / k, -half + 2.0 * half * (i + 1) / k});
       return r;
     };
     if (cuts == 0) {
@@ -238,7 +247,8 @@ struct Prism {
                 if (std::abs(M.determinant()) < 1e-9) continue;
                 const Vec3 x = M.inverse() * Vec3(pd[i], pd[j], pd[k]);
                 bool in = true;
-                for (std::size_t f = 0; f < pn.size() && in; ++f) in = pn[f].dot(x) <= pd[f] + 1e-12;
+                for (std::size_t f = 0; f < pn.size() && in; ++f)
+                  in = pn[f].dot(x) <= pd[f] + 1e-12;
                 if (in) vertices.push_back(x);
               }
           if (vertices.size() < 4) continue;
@@ -252,7 +262,8 @@ struct Prism {
   }
 };
 
-ObjectModel PrismObject(int cuts, const std::string& source, const std::string& cache, double spacing = 1e-3) {
+ObjectModel PrismObject(int cuts, const std::string& source, const std::string& cache,
+                        double spacing = 1e-3) {
   ObjectModel o;
   o.name = "prism";
   o.pieces = Prism().Pieces(cuts);
@@ -279,7 +290,8 @@ TEST(ContactField, SphereAndCapsuleIntoAConvexSolidWholeAndCut) {
     std::size_t pieces;
   };
   // One hull through GJK (no field) and through the field; then 2, 8 and 64 pieces.
-  for (const Case& c : {Case{1, "none", 1}, Case{1, "pieces", 1}, Case{0, "auto", 2}, Case{2, "auto", 8}, Case{4, "auto", 64}}) {
+  for (const Case& c : {Case{1, "none", 1}, Case{1, "pieces", 1}, Case{0, "auto", 2},
+                        Case{2, "auto", 8}, Case{4, "auto", 64}}) {
     const ObjectModel object = PrismObject(c.cuts, c.source, "");
     EXPECT_EQ(object.pieces.size(), c.pieces);
     EXPECT_EQ(object.field != nullptr, c.source != "none");
@@ -288,7 +300,8 @@ TEST(ContactField, SphereAndCapsuleIntoAConvexSolidWholeAndCut) {
     for (const Vec3& offset : {Vec3(0, 0.0041, -0.0033), Vec3(0, 0, 0)}) {
       const Vec3 start = Vec3(0.051, 0.0, 0.0) + offset;
       ExpectSweep(Push(hand, object, oracle, "tip", start, dir, 0.0025, 12), what + ", sphere");
-      ExpectSweep(Push(hand, object, oracle, "phalanx", start, dir, 0.0025, 10), what + ", capsule");
+      ExpectSweep(Push(hand, object, oracle, "phalanx", start, dir, 0.0025, 10),
+                  what + ", capsule");
     }
   }
 }
@@ -301,8 +314,10 @@ TEST(ContactField, PerPieceDepthIsWhatTheFieldFixes) {
   const std::vector<ConvexPiece> whole = Prism().Pieces(1);
   const TriangleMesh surface = whole[0].ToMesh();
   const MeshOracle oracle({&surface});
-  const Sweep a = Push(hand, pieces, oracle, "tip", Vec3(0.03, 0.001, 0.002), Vec3(-1, 0, 0), 0.005, 5);
-  const Sweep b = Push(hand, field, oracle, "tip", Vec3(0.03, 0.001, 0.002), Vec3(-1, 0, 0), 0.005, 5);
+  const Sweep a =
+      Push(hand, pieces, oracle, "tip", Vec3(0.03, 0.001, 0.002), Vec3(-1, 0, 0), 0.005, 5);
+  const Sweep b =
+      Push(hand, field, oracle, "tip", Vec3(0.03, 0.001, 0.002), Vec3(-1, 0, 0), 0.005, 5);
   double worst_pieces = 0.0, worst_field = 0.0;
   for (std::size_t k = 0; k < a.exact.size(); ++k) {
     worst_pieces = std::max(worst_pieces, std::abs(a.measured[k] - a.exact[k]));
@@ -344,11 +359,13 @@ TEST(ContactField, ObjectJsonSettingsAreReadAndChecked) {
   };
   const ObjectModel none = LoadObjectModel(with(R"({"source": "none"})"));
   EXPECT_FALSE(none.field);
-  const ObjectModel coarse = LoadObjectModel(with(R"({"source": "visual", "spacing": 0.004, "padding": 0.01})"));
+  const ObjectModel coarse =
+      LoadObjectModel(with(R"({"source": "visual", "spacing": 0.004, "padding": 0.01})"));
   ASSERT_TRUE(coarse.field);
   EXPECT_DOUBLE_EQ(coarse.field->spacing, 0.004);
   EXPECT_NE(coarse.field->source.find("closed mesh"), std::string::npos);
-  for (const char* bad : {R"({"spacng": 0.001})", R"({"source": "sdf"})", R"({"spacing": -1})", R"("pieces")"}) {
+  for (const char* bad :
+       {R"({"spacng": 0.001})", R"({"source": "sdf"})", R"({"spacing": -1})", R"("pieces")"}) {
     try {
       LoadObjectModel(with(bad));
       ADD_FAILURE() << bad;
@@ -384,10 +401,13 @@ TEST(ContactField, GrazingPointIsWhereTheLineOfSightLeavesTheSurface) {
   DistanceFieldParams params;
   params.spacing = 1e-3;
   const double r = 0.010, d = 0.300;
-  const DistanceField cylinder = BuildDistanceFieldFromPieces({ConvexPiece::Cylinder(r, 0.040, Transform::Identity())}, params);
+  const DistanceField cylinder = BuildDistanceFieldFromPieces(
+      {ConvexPiece::Cylinder(r, 0.040, Transform::Identity())}, params);
   const Vec3 eye(d, 0.0, 0.0);
   const double phi = std::acos(r / d);
-  const auto on = [](double radius, double angle, double z) { return Vec3(radius * std::cos(angle), radius * std::sin(angle), z); };
+  const auto on = [](double radius, double angle, double z) {
+    return Vec3(radius * std::cos(angle), radius * std::sin(angle), z);
+  };
   for (const double offset : {0.0, 0.0004}) {  // on the field's surface, and 0.4 mm outside it
     const double radius = r + offset;
     const double grazing = std::acos(radius / d);
@@ -413,7 +433,8 @@ TEST(ContactField, GrazingPointIsWhereTheLineOfSightLeavesTheSurface) {
   const Vec3 behind = on(r, phi + 20.0 * M_PI / 180, 0.0);
   EXPECT_EQ(GrazingPoint(cylinder, behind, eye, 0.008), behind);
 
-  const DistanceField box = BuildDistanceFieldFromPieces({ConvexPiece::Box(Vec3(0.02, 0.02, 0.02), Transform::Identity())}, params);
+  const DistanceField box = BuildDistanceFieldFromPieces(
+      {ConvexPiece::Box(Vec3(0.02, 0.02, 0.02), Transform::Identity())}, params);
   const Vec3 face(0.02, 0.012, 0.003);  // on the +x face; the +y face turns away from the eye
   const Vec3 edge = GrazingPoint(box, face, eye, 0.020);
   // On the edge, within the field's rounding of it (about half a spacing); the walk followed the
@@ -454,14 +475,16 @@ TEST(ContactField, YcbScansWithTheirVhacdPieces) {
       for (int a = 0; a < 3; ++a) reach += std::abs(dir[a]) * 0.5 * box.Size()[a];
       const Vec3 start = centre + dir * (reach + 0.005 + 0.014);
       const int steps = static_cast<int>((reach + 0.019) / 0.004);
-      const std::string what = std::string(name) + " along " + std::to_string(raw.x()) + "," + std::to_string(raw.y());
+      const std::string what =
+          std::string(name) + " along " + std::to_string(raw.x()) + "," + std::to_string(raw.y());
       // Monotonic only while approaching the medial axis: cut the sweep where the exact depth
       // stops growing.
       for (const char* link : {"tip", "phalanx"}) {
         Sweep s = Push(hand, object, oracle, link, start, -dir, 0.004, steps);
         std::size_t keep = 1;
         while (keep < s.exact.size() && s.exact[keep] <= s.exact[keep - 1]) ++keep;
-        s.measured.resize(keep), s.exact.resize(keep), s.angle_deg.resize(keep), s.normal_checked.resize(keep);
+        s.measured.resize(keep), s.exact.resize(keep), s.angle_deg.resize(keep),
+            s.normal_checked.resize(keep);
         const std::array<int, 2> n = ExpectSweep(s, what + " " + link, 0.0);
         compared += n[0], normals += n[1];
       }
@@ -493,7 +516,8 @@ TEST(ContactField, MustardSweepReport) {
   for (double s : {0.025, 0.020, 0.015, 0.010, 0.0}) {
     const Sweep a = Push(hand, per_piece, oracle, "tip", centre + dir * s, dir, 0.0, 1);
     const Sweep b = Push(hand, whole, oracle, "tip", centre + dir * s, dir, 0.0, 1);
-    std::printf("%5.0f | %6.1f | %6.1f | %6.1f\n", s * 1e3, -a.measured[0] * 1e3, -b.measured[0] * 1e3, -b.exact[0] * 1e3);
+    std::printf("%5.0f | %6.1f | %6.1f | %6.1f\n", s * 1e3, -a.measured[0] * 1e3,
+                -b.measured[0] * 1e3, -b.exact[0] * 1e3);
     EXPECT_NEAR(b.measured[0], b.exact[0], 1e-3);
     EXPECT_GT(-b.measured[0], prev);
     prev = -b.measured[0];

@@ -36,9 +36,9 @@ Eigen::Matrix<double, 2, 3> NumericJacobian(const Intrinsics& K, const Vec3& X) 
 TEST(Intrinsics, ProjectionJacobianMatchesFiniteDifferences) {
   const Intrinsics K = Camera();
   // Centre, image border, and grazing depth (a point far off-axis, close to the camera).
-  const std::vector<Vec3> points = {Vec3(0.0, 0.0, 0.5), Vec3(0.26, 0.19, 0.5),
+  const std::vector<Vec3> points = {Vec3(0.0, 0.0, 0.5),     Vec3(0.26, 0.19, 0.5),
                                     Vec3(-0.26, -0.19, 0.5), Vec3(0.4, 0.0, 0.05),
-                                    Vec3(0.01, -0.3, 0.02), Vec3(0.1, 0.1, 3.0)};
+                                    Vec3(0.01, -0.3, 0.02),  Vec3(0.1, 0.1, 3.0)};
   for (const Vec3& X : points) {
     const auto J = K.ProjectJacobian(X);
     const auto N = NumericJacobian(K, X);
@@ -91,22 +91,30 @@ TEST(Intrinsics, ValidateNamesTheField) {
 // corrupt, are refused with the field: Undistort could not invert them.
 TEST(Intrinsics, ValidateRefusesDistortionThatCannotBeInverted) {
   Intrinsics K = Camera();
-  for (const std::array<double, 5>& d : std::vector<std::array<double, 5>>{
-           {-0.21, 0.08, 0.001, -0.0007, -0.01}, {-0.35, 0.15, 0.0, 0.0, -0.03}, {0.1, -0.02, 0.0, 0.0, 0.0}, {0, 0, 0, 0, 0}}) {
+  for (const std::array<double, 5>& d :
+       std::vector<std::array<double, 5>>{{-0.21, 0.08, 0.001, -0.0007, -0.01},
+                                          {-0.35, 0.15, 0.0, 0.0, -0.03},
+                                          {0.1, -0.02, 0.0, 0.0, 0.0},
+                                          {0, 0, 0, 0, 0}}) {
     K.distortion = d;
     EXPECT_NO_THROW(K.Validate("x")) << d[0];
     // and Undistort does invert them at the image's corner
     const Vec2 corner(K.width - 0.5, K.height - 0.5);
     EXPECT_LT((K.Distort(K.Undistort(corner)) - corner).norm(), 1e-3) << d[0];
   }
-  for (const std::array<double, 5>& d : std::vector<std::array<double, 5>>{
-           {1e6, 0, 0, 0, 0}, {0, 0, 0, 0, -1e6}, {-2.0, 0, 0, 0, 0}, {0, 0, 1e6, 0, 0}, {0, 0, 0, -2.0, 0}}) {
+  for (const std::array<double, 5>& d : std::vector<std::array<double, 5>>{{1e6, 0, 0, 0, 0},
+                                                                           {0, 0, 0, 0, -1e6},
+                                                                           {-2.0, 0, 0, 0, 0},
+                                                                           {0, 0, 1e6, 0, 0},
+                                                                           {0, 0, 0, -2.0, 0}}) {
     K.distortion = d;
     try {
       K.Validate("cam.json");
       ADD_FAILURE() << "accepted " << d[0] << " " << d[2] << " " << d[3] << " " << d[4];
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("cam.json: camera intrinsics field 'distortion"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("cam.json: camera intrinsics field 'distortion"),
+                std::string::npos)
+          << e.what();
     }
   }
 }

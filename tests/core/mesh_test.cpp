@@ -62,7 +62,8 @@ TEST(Mesh, OpenMeshIsNotClosed) {
 
 TEST(Mesh, ConnectedComponentsSeparateDisjointParts) {
   TriangleMesh a = ConvexPiece::Box(Vec3(1, 1, 1), Transform::Identity()).ToMesh();
-  const TriangleMesh b = ConvexPiece::Box(Vec3(1, 1, 1), MakeTransform(Vec3(5, 0, 0), Mat3::Identity())).ToMesh();
+  const TriangleMesh b =
+      ConvexPiece::Box(Vec3(1, 1, 1), MakeTransform(Vec3(5, 0, 0), Mat3::Identity())).ToMesh();
   const int base = static_cast<int>(a.vertices.size());
   a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
   a.normals.insert(a.normals.end(), b.normals.begin(), b.normals.end());
@@ -130,7 +131,8 @@ TriangleMesh GridBox(const Vec3& h, int n) {
   TriangleMesh m;
   std::map<std::tuple<long, long, long>, int> index;
   const auto vertex = [&](const Vec3& p) {
-    const auto key = std::make_tuple(std::lround(p.x() * 1e9), std::lround(p.y() * 1e9), std::lround(p.z() * 1e9));
+    const auto key = std::make_tuple(std::lround(p.x() * 1e9), std::lround(p.y() * 1e9),
+                                     std::lround(p.z() * 1e9));
     const auto it = index.find(key);
     if (it != index.end()) return it->second;
     m.vertices.push_back(p);
@@ -150,8 +152,10 @@ TriangleMesh GridBox(const Vec3& h, int n) {
         for (int j = 0; j < n; ++j) {
           const int a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
           // (u, v, axis) is right-handed: counter-clockwise from outside on the + side.
-          if (side > 0) m.triangles.emplace_back(a, b, c), m.triangles.emplace_back(a, c, d);
-          else m.triangles.emplace_back(a, c, b), m.triangles.emplace_back(a, d, c);
+          if (side > 0)
+            m.triangles.emplace_back(a, b, c), m.triangles.emplace_back(a, c, d);
+          else
+            m.triangles.emplace_back(a, c, b), m.triangles.emplace_back(a, d, c);
         }
     }
   return m;
@@ -163,7 +167,8 @@ TriangleMesh UvSphere(double r, int stacks, int slices) {
   for (int i = 0; i <= stacks; ++i)
     for (int j = 0; j <= slices; ++j) {
       const double th = M_PI * i / stacks, ph = 2 * M_PI * j / slices;
-      m.vertices.emplace_back(r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph), r * std::cos(th));
+      m.vertices.emplace_back(r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph),
+                              r * std::cos(th));
       m.uvs.emplace_back(double(j) / slices, double(i) / stacks);
     }
   const auto id = [&](int i, int j) { return i * (slices + 1) + j; };
@@ -184,7 +189,8 @@ TEST(SimplifyMesh, FlatFacesCollapseAndTheBoxStaysExact) {
   EXPECT_TRUE(IsClosed(s));
   EXPECT_LE(s.num_triangles(), 48u) << "flat faces need few triangles";
   EXPECT_NEAR(ComputeMassProperties({&s}).volume, 8 * h.prod(), 1e-12 * 8 * h.prod());
-  EXPECT_LT((s.Bounds().min - box.Bounds().min).norm() + (s.Bounds().max - box.Bounds().max).norm(), 1e-12);
+  EXPECT_LT((s.Bounds().min - box.Bounds().min).norm() + (s.Bounds().max - box.Bounds().max).norm(),
+            1e-12);
 }
 
 TEST(SimplifyMesh, KeepsSeamsAndStopsAtItsError) {
@@ -217,7 +223,9 @@ TEST(SimplifyMesh, KeepsSeamsAndStopsAtItsError) {
   for (std::size_t i = 0; i < s.vertices.size(); ++i) {
     bool found = false;
     for (std::size_t j = 0; j < sphere.vertices.size() && !found; ++j)
-      if ((s.vertices[i] - sphere.vertices[j]).norm() == 0.0 && (s.uvs[i] - sphere.uvs[j]).norm() == 0.0) found = true;
+      if ((s.vertices[i] - sphere.vertices[j]).norm() == 0.0 &&
+          (s.uvs[i] - sphere.uvs[j]).norm() == 0.0)
+        found = true;
     EXPECT_TRUE(found) << "vertex " << i << " is not an original vertex with its uv";
   }
   for (int v : seam) {
@@ -230,12 +238,16 @@ TEST(SimplifyMesh, KeepsSeamsAndStopsAtItsError) {
   // The surface stays near the sphere: triangle centres within the error bound of it.
   double worst = 0.0;
   for (const auto& t : s.triangles) {
-    const Vec3 c = (s.vertices[static_cast<std::size_t>(t[0])] + s.vertices[static_cast<std::size_t>(t[1])] + s.vertices[static_cast<std::size_t>(t[2])]) / 3.0;
+    const Vec3 c =
+        (s.vertices[static_cast<std::size_t>(t[0])] + s.vertices[static_cast<std::size_t>(t[1])] +
+         s.vertices[static_cast<std::size_t>(t[2])]) /
+        3.0;
     worst = std::max(worst, r - c.norm());
   }
   EXPECT_LT(worst, 0.005);
-  std::cout << "  sphere " << sphere.num_triangles() << " -> " << early.num_triangles() << " (1 mm) and " << s.num_triangles()
-            << " triangles (5 mm), deepest centre " << worst * 1000 << " mm inside\n";
+  std::cout << "  sphere " << sphere.num_triangles() << " -> " << early.num_triangles()
+            << " (1 mm) and " << s.num_triangles() << " triangles (5 mm), deepest centre "
+            << worst * 1000 << " mm inside\n";
 }
 
 }  // namespace

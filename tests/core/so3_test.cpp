@@ -46,7 +46,8 @@ TEST(So3, LogInvertsExpIncludingDegenerateAngles) {
     EXPECT_LT((LogSO3(ExpSO3(w)) - w).norm(), 1e-20 + 1e-9 * tiny);
   }
   // Exactly π: the axis comes back up to sign, with angle π.
-  for (const Vec3& axis : {Vec3(Vec3::UnitX()), Vec3(Vec3::UnitY()), Vec3(Vec3::UnitZ()), RandomUnit()}) {
+  for (const Vec3& axis :
+       {Vec3(Vec3::UnitX()), Vec3(Vec3::UnitY()), Vec3(Vec3::UnitZ()), RandomUnit()}) {
     const Vec3 w = LogSO3(ExpSO3(M_PI * axis));
     EXPECT_NEAR(w.norm(), M_PI, 1e-9);
     EXPECT_NEAR(std::abs(w.normalized().dot(axis)), 1.0, 1e-9);

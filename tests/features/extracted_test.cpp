@@ -38,7 +38,8 @@ struct Pair {
 TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
   Pair p;
   const Transform T_true = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, 0.15)));
-  const Transform T_est = MakeTransform(Vec3(0.004, -0.002, 0.003), ExpSO3(Vec3(0.01, -0.015, 0.02))) * T_true;
+  const Transform T_est =
+      MakeTransform(Vec3(0.004, -0.002, 0.003), ExpSO3(Vec3(0.01, -0.015, 0.02))) * T_true;
   const RenderOutput real = p.Render(T_true);
   const RenderOutput virt = p.Render(T_est);
   std::vector<std::uint8_t> mask(virt.label.size());
@@ -56,7 +57,8 @@ TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
   const Transform T_CP = p.T_PC.inverse();
   for (const FeatureMatch& m : r.matches) {
     if (!m.inlier) continue;
-    const int x = static_cast<int>(std::lround(m.virtual_px.x())), y = static_cast<int>(std::lround(m.virtual_px.y()));
+    const int x = static_cast<int>(std::lround(m.virtual_px.x())),
+              y = static_cast<int>(std::lround(m.virtual_px.y()));
     const float z = virt.depth_at(x, y);
     if (!std::isfinite(z)) continue;
     const Vec3 X_P = p.T_PC * p.K.Unproject(m.virtual_px, z);
@@ -66,11 +68,13 @@ TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
     features.push_back({m.id, x_O, m.real_px});
   }
   ASSERT_GE(errors.size(), 6u);
-  std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2), errors.end());
+  std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2),
+                   errors.end());
   EXPECT_LT(errors[errors.size() / 2], 1.5) << "median pixel error of the matches";
 
   // The visual update removes most of the offset.
-  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  const HandModel hand =
+      LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
   BulletContactQuery query(hand, p.object);
   FilterParams params;
   params.pixel_sigma = 1.5;
@@ -81,9 +85,10 @@ TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
   EXPECT_GE(filter.UpdateVisual(features, p.T_PC, p.K), 6);
   const double after = (filter.position() - T_true.translation()).norm();
   const double rot_after = RotationDistance(filter.rotation(), T_true.linear());
-  std::cout << "  " << r.num_inliers() << " inliers of " << r.matches.size() << " matches, median error "
-            << errors[errors.size() / 2] << " px; position error " << before * 1000 << " -> " << after * 1000
-            << " mm, orientation " << rot_before * 180 / M_PI << " -> " << rot_after * 180 / M_PI << " deg\n";
+  std::cout << "  " << r.num_inliers() << " inliers of " << r.matches.size()
+            << " matches, median error " << errors[errors.size() / 2] << " px; position error "
+            << before * 1000 << " -> " << after * 1000 << " mm, orientation "
+            << rot_before * 180 / M_PI << " -> " << rot_after * 180 / M_PI << " deg\n";
   EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
   EXPECT_LT(rot_after, rot_before) << rot_before << " -> " << rot_after;
 }
@@ -97,37 +102,43 @@ TEST(ExtractedFeatures, AGlobalShiftBridgesAnOffsetBeyondTheLocalSearch) {
   Pair p;
   const Transform T_true = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, 0.15)));
   const Vec3 side = p.T_PC.linear().col(0);  // the camera's x axis, in P
-  const Transform T_est = MakeTransform(0.03 * side + Vec3(0, 0, 0.004), ExpSO3(Vec3(0.01, -0.01, 0.02))) * T_true;
+  const Transform T_est =
+      MakeTransform(0.03 * side + Vec3(0, 0, 0.004), ExpSO3(Vec3(0.01, -0.01, 0.02))) * T_true;
   const RenderOutput real = p.Render(T_true), virt = p.Render(T_est);
   std::vector<std::uint8_t> mask(virt.label.size());
   for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = virt.label[i] == kObjectLabel;
   const Vec3 centre_O = p.object.Bounds().Center();
   const Transform T_CP = p.T_PC.inverse();
-  const Vec2 offset = p.K.Project(T_CP * (T_true * centre_O)) - p.K.Project(T_CP * (T_est * centre_O));
+  const Vec2 offset =
+      p.K.Project(T_CP * (T_true * centre_O)) - p.K.Project(T_CP * (T_est * centre_O));
   ASSERT_GT(offset.norm(), 50.0) << "the offset must lie beyond the local search";
   // The median pixel error of the inliers against where their object points really project.
   const auto median_error = [&](const MatchResult& r) {
     std::vector<double> errors;
     for (const FeatureMatch& m : r.matches) {
       if (!m.inlier) continue;
-      const float z = virt.depth_at(static_cast<int>(std::lround(m.virtual_px.x())), static_cast<int>(std::lround(m.virtual_px.y())));
+      const float z = virt.depth_at(static_cast<int>(std::lround(m.virtual_px.x())),
+                                    static_cast<int>(std::lround(m.virtual_px.y())));
       if (!std::isfinite(z)) continue;
       const Vec3 x_O = T_est.inverse() * (p.T_PC * p.K.Unproject(m.virtual_px, z));
       errors.push_back((p.K.Project(T_CP * (T_true * x_O)) - m.real_px).norm());
     }
     if (errors.empty()) return std::numeric_limits<double>::infinity();
-    std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2), errors.end());
+    std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2),
+                     errors.end());
     return errors[errors.size() / 2];
   };
   FeatureParams local;
   const MatchResult near = MatchFeatures(real.colour, virt.colour, &mask, local);
   EXPECT_FALSE(std::isfinite(near.debug.global_cost)) << "step 0 runs only when asked";
-  EXPECT_TRUE(near.num_inliers() < 3 || median_error(near) > 5.0) << near.num_inliers() << " inliers, median error " << median_error(near);
+  EXPECT_TRUE(near.num_inliers() < 3 || median_error(near) > 5.0)
+      << near.num_inliers() << " inliers, median error " << median_error(near);
   FeatureParams global;
   global.global_search_radius = 90;
   const MatchResult far = MatchFeatures(real.colour, virt.colour, &mask, global);
-  std::cout << "  offset (" << offset.transpose() << ") px, step 0 shift (" << far.debug.global_shift.transpose() << "), chamfer "
-            << far.debug.global_cost << " px (unshifted " << far.debug.global_cost_unshifted << "); " << far.num_inliers()
+  std::cout << "  offset (" << offset.transpose() << ") px, step 0 shift ("
+            << far.debug.global_shift.transpose() << "), chamfer " << far.debug.global_cost
+            << " px (unshifted " << far.debug.global_cost_unshifted << "); " << far.num_inliers()
             << " inliers, median error " << median_error(far) << " px\n";
   EXPECT_LT((far.debug.global_shift - offset).norm(), 5.0);
   EXPECT_LT(far.debug.global_cost, 0.5 * far.debug.global_cost_unshifted);
@@ -147,7 +158,8 @@ TEST(ExtractedFeatures, AGlobalShiftBridgesAnOffsetBeyondTheLocalSearch) {
 TEST(ExtractedFeatures, TheGlobalShiftsCostIsTheBruteForceChamfer) {
   Pair p;
   const Transform T_true = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, 0.15)));
-  const Transform T_est = MakeTransform(0.03 * p.T_PC.linear().col(0), ExpSO3(Vec3(0.01, -0.01, 0.02))) * T_true;
+  const Transform T_est =
+      MakeTransform(0.03 * p.T_PC.linear().col(0), ExpSO3(Vec3(0.01, -0.01, 0.02))) * T_true;
   const RenderOutput real = p.Render(T_true), virt = p.Render(T_est);
   FeatureParams q;
   q.orientation_bins = 1;
@@ -172,13 +184,15 @@ TEST(ExtractedFeatures, TheGlobalShiftsCostIsTheBruteForceChamfer) {
         for (int dy = -T; dy <= T; ++dy)
           for (int dx = -T; dx <= T; ++dx) {
             const int u = x + dx, v = y + dy;
-            if (u >= 0 && v >= 0 && u < W && v < H && re.data[static_cast<std::size_t>(v * W + u)]) d = std::min(d, std::hypot(dx, dy));
+            if (u >= 0 && v >= 0 && u < W && v < H && re.data[static_cast<std::size_t>(v * W + u)])
+              d = std::min(d, std::hypot(dx, dy));
           }
       sum += d;
     }
     return sum / static_cast<double>(n);
   };
-  const int sx = static_cast<int>(r.debug.global_shift.x()), sy = static_cast<int>(r.debug.global_shift.y());
+  const int sx = static_cast<int>(r.debug.global_shift.x()),
+            sy = static_cast<int>(r.debug.global_shift.y());
   EXPECT_GT(std::hypot(sx, sy), 40.0);
   EXPECT_NEAR(r.debug.global_cost, chamfer(sx, sy), 1e-5);
   EXPECT_NEAR(r.debug.global_cost_unshifted, chamfer(0, 0), 1e-5);
@@ -201,12 +215,16 @@ TEST(ExtractedFeatures, CornersNearAnOccluderAreRejected) {
   for (int y = y0; y <= y1; ++y)
     for (int x = 0; x < a.width; ++x) band[std::size_t(y) * a.width + x] = 255;
   FeatureParams params;
-  const auto near_band = [&](const Vec2& c) { return c.y() >= y0 - params.occluder_clearance && c.y() <= y1 + params.occluder_clearance; };
+  const auto near_band = [&](const Vec2& c) {
+    return c.y() >= y0 - params.occluder_clearance && c.y() <= y1 + params.occluder_clearance;
+  };
   const MatchResult free = MatchFeatures(a.colour, a.colour, &mask, params);
-  EXPECT_TRUE(std::any_of(free.debug.virtual_corners.begin(), free.debug.virtual_corners.end(), near_band));
+  EXPECT_TRUE(
+      std::any_of(free.debug.virtual_corners.begin(), free.debug.virtual_corners.end(), near_band));
   const MatchResult occluded = MatchFeatures(a.colour, a.colour, &mask, params, &band);
   EXPECT_FALSE(occluded.debug.virtual_corners.empty());
-  EXPECT_FALSE(std::any_of(occluded.debug.virtual_corners.begin(), occluded.debug.virtual_corners.end(), near_band));
+  EXPECT_FALSE(std::any_of(occluded.debug.virtual_corners.begin(),
+                           occluded.debug.virtual_corners.end(), near_band));
 }
 
 TEST(ExtractedFeatures, IdenticalImagesMatchInPlaceAndBadParametersAreRejected) {

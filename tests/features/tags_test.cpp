@@ -22,13 +22,16 @@ std::vector<Expected> ReadExpected(const std::string& path) {
   std::ifstream in(path);
   std::vector<Expected> out;
   std::string line;
-  const std::regex re(R"((\d+),\s*\(([-0-9.]+) ([-0-9.]+)\),\s*\(([-0-9.]+) ([-0-9.]+)\),\s*\(([-0-9.]+) ([-0-9.]+)\),\s*\(([-0-9.]+) ([-0-9.]+)\))");
+  const std::regex re(
+      R"((\d+),\s*\(([-0-9.]+) ([-0-9.]+)\),\s*\(([-0-9.]+) ([-0-9.]+)\),\s*\(([-0-9.]+) ([-0-9.]+)\),\s*\(([-0-9.]+) ([-0-9.]+)\))");
   while (std::getline(in, line)) {
     std::smatch m;
     if (!std::regex_search(line, m, re)) continue;
     Expected e;
     e.id = std::stoi(m[1]);
-    for (int k = 0; k < 4; ++k) e.corners[static_cast<std::size_t>(k)] = Vec2(std::stod(m[2 + 2 * k]), std::stod(m[3 + 2 * k]));
+    for (int k = 0; k < 4; ++k)
+      e.corners[static_cast<std::size_t>(k)] =
+          Vec2(std::stod(m[2 + 2 * k]), std::stod(m[3 + 2 * k]));
     out.push_back(e);
   }
   return out;
@@ -45,7 +48,8 @@ TEST(Tags, UpstreamPhotographsGiveTheExpectedCorners) {
   params.refine_edges = false;
   TagDetector detector(params);
   int matched = 0;
-  for (const char* name : {"33369213973_9d9bb4cc96_c", "34085369442_304b6bafd9_c", "34139872896_defdb2f8d9_c"}) {
+  for (const char* name :
+       {"33369213973_9d9bb4cc96_c", "34085369442_304b6bafd9_c", "34139872896_defdb2f8d9_c"}) {
     const std::vector<Expected> expected = ReadExpected(dir + name + ".txt");
     ASSERT_FALSE(expected.empty()) << name;
     const std::vector<TagDetection> found = detector.Detect(ReadGreyImage(dir + name + ".jpg"));
@@ -56,7 +60,10 @@ TEST(Tags, UpstreamPhotographsGiveTheExpectedCorners) {
         if (d.id != e.id) continue;
         double worst = 0.0;
         for (int k = 0; k < 4; ++k)
-          worst = std::max(worst, (d.corners[static_cast<std::size_t>(k)] + Vec2(0.5, 0.5) - e.corners[static_cast<std::size_t>(k)]).cwiseAbs().maxCoeff());
+          worst = std::max(worst, (d.corners[static_cast<std::size_t>(k)] + Vec2(0.5, 0.5) -
+                                   e.corners[static_cast<std::size_t>(k)])
+                                      .cwiseAbs()
+                                      .maxCoeff());
         best = std::min(best, worst);
       }
       EXPECT_LT(best, 0.15) << name << " tag " << e.id << " at " << e.corners[0].transpose();
@@ -105,14 +112,17 @@ TEST(Tags, RenderedTagCornersMatchTheProjection) {
   TagDetector detector;  // default: decimate 2, edge refinement on
   int checked = 0;
   for (int trial = 0; trial < 4; ++trial) {
-    const Transform T_PT = MakeTransform(Vec3(0.01 * trial - 0.015, 0.005 * trial, 0.3 + 0.03 * trial), ExpSO3(Vec3(M_PI + 0.3 - 0.15 * trial, 0.25, 0.2 * trial)));
+    const Transform T_PT =
+        MakeTransform(Vec3(0.01 * trial - 0.015, 0.005 * trial, 0.3 + 0.03 * trial),
+                      ExpSO3(Vec3(M_PI + 0.3 - 0.15 * trial, 0.25, 0.2 * trial)));
     const std::vector<TagDetection> found = detector.Detect(RenderTag(renderer, mesh, K, T_PT));
     ASSERT_EQ(found.size(), 1u) << "trial " << trial;
     EXPECT_EQ(found[0].id, 42);
     const auto corners = tag.CornersO();
     for (int k = 0; k < 4; ++k) {
       const Vec2 expected = K.Project(T_PT * corners[static_cast<std::size_t>(k)]);
-      EXPECT_LT((found[0].corners[static_cast<std::size_t>(k)] - expected).norm(), 0.35) << "trial " << trial << " corner " << k;
+      EXPECT_LT((found[0].corners[static_cast<std::size_t>(k)] - expected).norm(), 0.35)
+          << "trial " << trial << " corner " << k;
       ++checked;
     }
   }
@@ -135,12 +145,14 @@ TEST(Tags, RegionSearchAgreesWithTheWholeFrame) {
   const std::vector<TagDetection> whole = detector.Detect(image);
   ASSERT_EQ(whole.size(), 1u);
   const Vec2 c = whole[0].center;
-  const std::vector<TagDetection> region = detector.Detect(image, PixelRect{int(c.x()) - 40, int(c.y()) - 40, int(c.x()) + 40, int(c.y()) + 40});
+  const std::vector<TagDetection> region = detector.Detect(
+      image, PixelRect{int(c.x()) - 40, int(c.y()) - 40, int(c.x()) + 40, int(c.y()) + 40});
   ASSERT_EQ(region.size(), 1u);
   EXPECT_EQ(region[0].id, 7);
   const auto corners = tag.CornersO();
   for (std::size_t k = 0; k < 4; ++k) {
-    EXPECT_LT((region[0].corners[k] - whole[0].corners[k]).norm(), 1e-3) << k;  // libapriltag computes in float
+    EXPECT_LT((region[0].corners[k] - whole[0].corners[k]).norm(), 1e-3)
+        << k;  // libapriltag computes in float
     EXPECT_LT((region[0].corners[k] - K.Project(T_PT * corners[k])).norm(), 0.35) << k;
   }
   EXPECT_TRUE(detector.Detect(image, PixelRect{0, 0, 100, 100}).empty());
@@ -156,19 +168,24 @@ TEST(Tags, TinyImagesAndRegionsAtEveryBorderNeverCrash) {
     TagDetectorParams p;
     p.decimate = decimate;
     TagDetector detector(p);
-    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {4, 4}, {100, 1}, {1, 100}, {115, 3}, {3, 115}, {8, 8}, {9, 20}, {640, 4}}) {
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{
+             {1, 1}, {4, 4}, {100, 1}, {1, 100}, {115, 3}, {3, 115}, {8, 8}, {9, 20}, {640, 4}}) {
       Image8 image(w, h, 3);
-      for (std::size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<std::uint8_t>((i * 37) & 255);
+      for (std::size_t i = 0; i < image.data.size(); ++i)
+        image.data[i] = static_cast<std::uint8_t>((i * 37) & 255);
       EXPECT_TRUE(detector.Detect(image).empty()) << w << "x" << h << " at decimate " << decimate;
     }
     Image8 frame(640, 480, 3);
-    for (std::size_t i = 0; i < frame.data.size(); ++i) frame.data[i] = static_cast<std::uint8_t>((i * 131) & 255);
+    for (std::size_t i = 0; i < frame.data.size(); ++i)
+      frame.data[i] = static_cast<std::uint8_t>((i * 131) & 255);
     for (int inside = -2; inside <= 12; ++inside) {  // regions reaching `inside` px into the frame
       const int x = 300, y = 200;
-      for (const PixelRect& r : {PixelRect{x, -100, x + 115, inside}, PixelRect{x, 480 - inside, x + 115, 580},
-                                 PixelRect{-100, y, inside, y + 115}, PixelRect{640 - inside, y, 740, y + 115},
-                                 PixelRect{-50, -50, inside, inside}, PixelRect{640 - inside, 480 - inside, 700, 540}})
-        EXPECT_TRUE(detector.Detect(frame, r).empty()) << r.x0 << "," << r.y0 << "," << r.x1 << "," << r.y1;
+      for (const PixelRect& r :
+           {PixelRect{x, -100, x + 115, inside}, PixelRect{x, 480 - inside, x + 115, 580},
+            PixelRect{-100, y, inside, y + 115}, PixelRect{640 - inside, y, 740, y + 115},
+            PixelRect{-50, -50, inside, inside}, PixelRect{640 - inside, 480 - inside, 700, 540}})
+        EXPECT_TRUE(detector.Detect(frame, r).empty())
+            << r.x0 << "," << r.y0 << "," << r.x1 << "," << r.y1;
     }
   }
 }
@@ -193,7 +210,8 @@ TEST(Tags, PrintedTagMeshesSitOnTheirPlacements) {
     }
     EXPECT_LT((centre - (tag.T_OT.translation() + 0.0002 * n)).norm(), 1e-9);
     double half = 0.0;
-    for (const Vec3& v : meshes[i].vertices) half = std::max(half, (tag.T_OT.inverse() * v).head<2>().cwiseAbs().maxCoeff());
+    for (const Vec3& v : meshes[i].vertices)
+      half = std::max(half, (tag.T_OT.inverse() * v).head<2>().cwiseAbs().maxCoeff());
     EXPECT_GE(half, tag.size / 2 - 1e-9);  // the white border lies outside the outer corners
   }
 }

@@ -162,11 +162,11 @@ TEST(Filter, ForcesOutsideTheConeOrBelowThresholdAreRejected) {
   const Vec3 c_f(0, 0.085, 0.01);
   const std::vector<std::pair<Vec3, ContactKind>> cases = {
       {Vec3(0, 0, 5.0), ContactKind::kTorque},
-      {Vec3(0, 0, 1.0), ContactKind::kRejectedForce},                      // below 2 N
+      {Vec3(0, 0, 1.0), ContactKind::kRejectedForce},  // below 2 N
       // (A planar finger senses no force along x: tangential forces lie along y here.)
-      {Vec3(0, 4.0, 3.5), ContactKind::kRejectedCone},                     // 48.8° off the normal
-      {Vec3(0, 3.0, 4.0), ContactKind::kTorque},                           // 36.9°: inside
-      {Vec3(0, 0, -5.0), ContactKind::kRejectedCone}};                     // pulling, not pushing
+      {Vec3(0, 4.0, 3.5), ContactKind::kRejectedCone},  // 48.8° off the normal
+      {Vec3(0, 3.0, 4.0), ContactKind::kTorque},        // 36.9°: inside
+      {Vec3(0, 0, -5.0), ContactKind::kRejectedCone}};  // pulling, not pushing
   for (const auto& [force, kind] : cases) {
     Filter filter = s.Started(T0, FilterParams(), true);
     filter.Predict(s.q0, 0.001);
@@ -224,7 +224,8 @@ TEST(Filter, JointBiasConvergesWhenAContactConstrainsIt) {
   ASSERT_NEAR(s.Distance(q_true, T_PO), 0.0, 1e-9);
   const Eigen::Vector2d tau = s.Torque(q_true, c_f, 5.0 * n);
 
-  Filter filter(s.hand, s.query, PerfectContacts(), FilterOptions{true});  // the rate below is for 1 mm
+  Filter filter(s.hand, s.query, PerfectContacts(),
+                FilterOptions{true});  // the rate below is for 1 mm
   // The object pose is known; j1 is accurate, j2's bias is uncertain (5°).
   filter.Reset(T_PO, s.q0, StartSigmas{1e-6, 1e-6, 0.0, Eigen::Vector2d(1e-9, 5.0 * M_PI / 180)});
   const double sigma0 = std::sqrt(filter.covariance()(7, 7));
@@ -251,7 +252,8 @@ Transform CameraLookingAt(const Vec3& p) {
 
 // 40 points spread over a 6 x 6 x 4 cm object at p (identity orientation), exactly as a camera
 // at T_PC_true sees them.
-std::vector<VisualFeature> FeaturesSeenFrom(const Transform& T_PC_true, const Intrinsics& K, const Vec3& p) {
+std::vector<VisualFeature> FeaturesSeenFrom(const Transform& T_PC_true, const Intrinsics& K,
+                                            const Vec3& p) {
   std::vector<VisualFeature> features;
   for (int i = 0; i < 40; ++i) {
     const Vec3 x_O(0.03 * std::cos(0.7 * i), 0.03 * std::sin(1.3 * i), 0.02 * std::cos(2.1 * i));
@@ -271,10 +273,12 @@ Intrinsics TestIntrinsics() {
 
 // The project's hand closed around the ketchup bottle (fingers flexed to touch it roughly).
 struct GraspScene {
-  HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  HandModel hand =
+      LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
   ObjectModel object = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
   BulletContactQuery query{hand, object};
-  Transform T_PO = MakeTransform(Vec3(0.0, 0.06, 0.045), ExpSO3(Vec3(0, M_PI / 2, 0)) * ExpSO3(Vec3(0, 0, 0.3)));
+  Transform T_PO =
+      MakeTransform(Vec3(0.0, 0.06, 0.045), ExpSO3(Vec3(0, M_PI / 2, 0)) * ExpSO3(Vec3(0, 0, 0.3)));
   Eigen::VectorXd q = Eigen::VectorXd::Constant(16, 0.6);
 };
 
@@ -288,7 +292,8 @@ TEST(Filter, CovarianceStaysSymmetricPositiveDefiniteOver10000Steps) {
   Eigen::VectorXd q = s.q;
   int with_contacts = 0;
   for (int k = 0; k < 10000; ++k) {
-    for (int j = 0; j < 16; ++j) q[j] += 0.002 * noise(test::Rng()) + 0.0005 * std::sin(0.01 * k + j);
+    for (int j = 0; j < 16; ++j)
+      q[j] += 0.002 * noise(test::Rng()) + 0.0005 * std::sin(0.01 * k + j);
     ClampToLimits(s.hand, q);
     Eigen::VectorXd tau(16);
     for (int j = 0; j < 16; ++j) tau[j] = 0.3 * noise(test::Rng());
@@ -302,7 +307,8 @@ TEST(Filter, CovarianceStaysSymmetricPositiveDefiniteOver10000Steps) {
       Eigen::LLT<Eigen::MatrixXd> llt(P);
       ASSERT_EQ(llt.info(), Eigen::Success) << "not positive definite at step " << k;
       ASSERT_TRUE(filter.position().allFinite());
-      ASSERT_LT((filter.rotation() * filter.rotation().transpose() - Mat3::Identity()).norm(), 1e-12);
+      ASSERT_LT((filter.rotation() * filter.rotation().transpose() - Mat3::Identity()).norm(),
+                1e-12);
     }
   }
   EXPECT_GT(with_contacts, 1000);  // the run exercised the updates
@@ -370,7 +376,8 @@ TEST(JointSamples, ScreeningClampingAndUndeflection) {
   ClampToLimits(s.hand, q);
   EXPECT_EQ(q[3], j3.upper);
   for (int i = 0; i < 16; ++i) {
-    const Joint& j = s.hand.joints[static_cast<std::size_t>(s.hand.q_joints[static_cast<std::size_t>(i)])];
+    const Joint& j =
+        s.hand.joints[static_cast<std::size_t>(s.hand.q_joints[static_cast<std::size_t>(i)])];
     if (i == 3) continue;
     EXPECT_EQ(q[i], j.has_limits ? std::clamp(s.q[i], j.lower, j.upper) : s.q[i]) << i;
   }
@@ -400,7 +407,8 @@ TEST(Filter, NonFiniteInputsAreSkippedAndCounted) {
   filter.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
   const Eigen::VectorXd tau = Eigen::VectorXd::Constant(16, 0.5);
   for (int k = 0; k < 10; ++k) filter.Predict(s.q, 0.002), filter.UpdateContacts(tau);
-  for (const double bad : {1e300, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+  for (const double bad :
+       {1e300, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
     Eigen::VectorXd q = s.q;
     q[5] = bad;
     filter.Predict(q, 0.002);
@@ -411,7 +419,8 @@ TEST(Filter, NonFiniteInputsAreSkippedAndCounted) {
     filter.Predict(s.q, 0.002);
     filter.UpdateContacts(nan_tau);
     EXPECT_GE(filter.trace().numeric_events, 1);
-    std::vector<VisualFeature> f{{0, Vec3::Zero(), Vec2(std::numeric_limits<double>::quiet_NaN(), 1.0)}};
+    std::vector<VisualFeature> f{
+        {0, Vec3::Zero(), Vec2(std::numeric_limits<double>::quiet_NaN(), 1.0)}};
     EXPECT_EQ(filter.UpdateVisual(f, CameraLookingAt(s.T_PO.translation()), TestIntrinsics()), 0);
     EXPECT_TRUE(filter.T_PO().matrix().allFinite());
     EXPECT_TRUE(filter.state().P.allFinite());
@@ -427,9 +436,11 @@ TEST(Filter, RestoredStateContinuesBitIdentically) {
   GraspScene s;
   FilterParams params;
   params.camera_position_sigma = 0.002;
-  Filter a(s.hand, s.query, params, FilterOptions{true}), b(s.hand, s.query, params, FilterOptions{true});
+  Filter a(s.hand, s.query, params, FilterOptions{true}),
+      b(s.hand, s.query, params, FilterOptions{true});
   a.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
-  b.Reset(s.T_PO * MakeTransform(Vec3(0.01, 0, 0), Mat3::Identity()), s.q, StartSigmas{0.03, 0.1, 0.1, {}});
+  b.Reset(s.T_PO * MakeTransform(Vec3(0.01, 0, 0), Mat3::Identity()), s.q,
+          StartSigmas{0.03, 0.1, 0.1, {}});
   Eigen::VectorXd q = s.q, tau = Eigen::VectorXd::Constant(16, 0.5);
   const auto halves = [&](Filter& f, int k) {
     f.Predict(q.array() + 1e-4 * (k % 3), 0.001);
@@ -483,7 +494,8 @@ TEST(Filter, TheOrientationsVarianceGrowsWithTheContactsTravelNotWithTheJointRat
   params.motion_orientation = 0.0;
   const auto run = [&](const FilterParams& p, const Mat3& G, int rate, double noise, double* path) {
     Filter f(s.hand, s.query, p, FilterOptions{false, G});
-    f.Reset(At(Vec3(0, 0.07, 0.0295)), s.q0, StartSigmas{0.02, 0.087, 1e-9, {}});  // 0.5 mm into the ball
+    f.Reset(At(Vec3(0, 0.07, 0.0295)), s.q0,
+            StartSigmas{0.02, 0.087, 1e-9, {}});  // 0.5 mm into the ball
     f.Predict(s.q0, 1.0 / rate);
     f.UpdateContacts(Eigen::Vector2d::Zero());
     const int link = f.state().active.at(0).link;
@@ -500,7 +512,8 @@ TEST(Filter, TheOrientationsVarianceGrowsWithTheContactsTravelNotWithTheJointRat
     for (int k = 1; k <= steps; ++k) {
       const Eigen::Vector2d q(0.0, 0.3 * k / steps);
       f.Predict(q + Eigen::Vector2d::Constant(k % 2 ? noise : -noise), 1.0 / rate);
-      if (k % (rate / 20) == 0) *path += (point(q) - last).norm(), last = point(q);  // at each window's end
+      if (k % (rate / 20) == 0)
+        *path += (point(q) - last).norm(), last = point(q);  // at each window's end
     }
     const Mat3 growth = f.covariance().block(3, 3, 3, 3) - before;  // isotropic, as Γ is
     EXPECT_LT((growth - growth(0, 0) * Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-12);
@@ -527,7 +540,9 @@ TEST(FilterJacobians, GraspMapBlockIsTheObjectPointVelocity) {
   Vec6 nu;
   nu << 0.1, -0.2, 0.05, 0.7, -0.3, 1.1;
   const double h = 1e-7;
-  const auto point = [&](double t) { return Vec3(p + nu.head<3>() * t + ExpSO3(nu.tail<3>() * t) * (c - p)); };
+  const auto point = [&](double t) {
+    return Vec3(p + nu.head<3>() * t + ExpSO3(nu.tail<3>() * t) * (c - p));
+  };
   const Vec3 fd = (point(h) - point(-h)) / (2 * h);
   EXPECT_LT((GraspMapBlock(c, p) * nu - fd).norm(), 1e-8);
 }
@@ -544,8 +559,10 @@ TEST(FilterJacobians, TwistFromContactsIncludingDegenerateCases) {
   EXPECT_LT((full.Solve(1e-12) - nu).norm(), 1e-6);
   // One contact, and collinear contacts: under-determined; the solver returns the minimum-norm
   // twist that reproduces the contact velocities, as the pseudo-inverse does.
-  for (const std::vector<Vec3>& cs : {std::vector<Vec3>{Vec3(0.03, 0.05, 0.04)},
-                                      std::vector<Vec3>{Vec3(0.03, 0.05, 0.04), Vec3(0.06, 0.05, 0.04), Vec3(-0.02, 0.05, 0.04)}}) {
+  for (const std::vector<Vec3>& cs :
+       {std::vector<Vec3>{Vec3(0.03, 0.05, 0.04)},
+        std::vector<Vec3>{Vec3(0.03, 0.05, 0.04), Vec3(0.06, 0.05, 0.04),
+                          Vec3(-0.02, 0.05, 0.04)}}) {
     TwistSolver solver;
     Eigen::MatrixXd A(3 * cs.size(), 6);
     Eigen::VectorXd b(3 * cs.size());
@@ -567,10 +584,13 @@ TEST(FilterJacobians, TwistFromContactsIncludingDegenerateCases) {
 TEST(FilterJacobians, DefaultTwistDampingKeepsNoiseOutOfIllConditionedRotations) {
   const Vec3 p(0.0, 0.05, 0.04);
   const Vec3 shift(0.0, 0.0, 0.001);  // the fingers move the object 1 mm
-  const std::vector<Vec3> contacts{Vec3(-0.02, 0.05, 0.04), Vec3(0.0, 0.05, 0.0402), Vec3(0.02, 0.05, 0.04)};
-  const std::vector<Vec3> noise{Vec3(2e-5, -1e-5, 2e-5), Vec3(-1e-5, 2e-5, -2e-5), Vec3(1e-5, 1e-5, 2e-5)};
+  const std::vector<Vec3> contacts{Vec3(-0.02, 0.05, 0.04), Vec3(0.0, 0.05, 0.0402),
+                                   Vec3(0.02, 0.05, 0.04)};
+  const std::vector<Vec3> noise{Vec3(2e-5, -1e-5, 2e-5), Vec3(-1e-5, 2e-5, -2e-5),
+                                Vec3(1e-5, 1e-5, 2e-5)};
   TwistSolver solver;
-  for (std::size_t i = 0; i < contacts.size(); ++i) solver.Add(GraspMapBlock(contacts[i], p), shift + noise[i]);
+  for (std::size_t i = 0; i < contacts.size(); ++i)
+    solver.Add(GraspMapBlock(contacts[i], p), shift + noise[i]);
   const Vec6 undamped = solver.Solve(1e-8);
   const Vec6 damped = solver.Solve(FilterParams().twist_damping);
   EXPECT_GT(undamped.tail<3>().norm(), 2.0 * M_PI / 180);
@@ -579,14 +599,15 @@ TEST(FilterJacobians, DefaultTwistDampingKeepsNoiseOutOfIllConditionedRotations)
 }
 
 TEST(FilterJacobians, ContactMeasurementJacobianMatchesFiniteDifferences) {
-  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  const HandModel hand =
+      LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
   const int m = hand.num_q(), n = 6 + m;
   const int link = hand.LinkIndex("index_distal");
   const Eigen::VectorXd q = Eigen::VectorXd::Constant(m, 0.3);
   const Vec3 x_f(0.002, 0.015, 0.009);  // fixed on the link
-  const Vec3 x_o(0.01, -0.02, 0.05);     // fixed on the object
-  for (const Mat3& R : {Mat3(Mat3::Identity()), ExpSO3(Vec3(0.3, -1.1, 0.4)), ExpSO3(Vec3(M_PI, 0, 0)),
-                        ExpSO3(M_PI * Vec3(1, 1, 0).normalized())}) {
+  const Vec3 x_o(0.01, -0.02, 0.05);    // fixed on the object
+  for (const Mat3& R : {Mat3(Mat3::Identity()), ExpSO3(Vec3(0.3, -1.1, 0.4)),
+                        ExpSO3(Vec3(M_PI, 0, 0)), ExpSO3(M_PI * Vec3(1, 1, 0).normalized())}) {
     const Vec3 p(0.01, 0.07, 0.03);
     KinematicsData kin(hand);
     const auto h = [&](const Eigen::VectorXd& d) {
@@ -627,7 +648,8 @@ TEST(FilterJacobians, VisualJacobianMatchesFiniteDifferences) {
   const Intrinsics K = TestIntrinsics();
   const Vec3 p(0.0, 0.06, 0.04);
   const Transform T_PC = CameraLookingAt(p);
-  for (const Mat3& R : {Mat3(Mat3::Identity()), ExpSO3(Vec3(M_PI, 0, 0)), ExpSO3(Vec3(0.2, 0.5, -0.7))}) {
+  for (const Mat3& R :
+       {Mat3(Mat3::Identity()), ExpSO3(Vec3(M_PI, 0, 0)), ExpSO3(Vec3(0.2, 0.5, -0.7))}) {
     for (const Vec3& x_o : {Vec3(0.0, 0.0, 0.0), Vec3(0.03, -0.02, 0.1), Vec3(-0.2, 0.1, 0.05)}) {
       const auto pix = [&](const Vec6& d) {
         const Vec3 X = p + d.head<3>() + ExpSO3(d.tail<3>()) * R * x_o;
@@ -637,7 +659,9 @@ TEST(FilterJacobians, VisualJacobianMatchesFiniteDifferences) {
       ASSERT_GT((T_PC.inverse() * X).z(), 0.0);
       const auto H = VisualMeasurementJacobian(X, p, T_PC, K);
       const Eigen::Matrix<double, 2, 6> N = CentralDifferences(pix);
-      EXPECT_LT((H - N).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, H.cwiseAbs().maxCoeff())) << H << "\n" << N;
+      EXPECT_LT((H - N).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, H.cwiseAbs().maxCoeff()))
+          << H << "\n"
+          << N;
     }
   }
 }
@@ -646,10 +670,14 @@ TEST(FilterJacobians, CameraPoseJacobianMatchesFiniteDifferences) {
   const Intrinsics K = TestIntrinsics();
   const Transform T_PC = CameraLookingAt(Vec3(0.0, 0.06, 0.04));
   for (const Vec3& X : {Vec3(0.0, 0.06, 0.04), Vec3(0.03, 0.04, 0.14), Vec3(-0.1, 0.1, 0.0)}) {
-    const auto pix = [&](const Vec6& e) { return K.Project((T_PC * MakeTransform(e.head<3>(), ExpSO3(e.tail<3>()))).inverse() * X); };
+    const auto pix = [&](const Vec6& e) {
+      return K.Project((T_PC * MakeTransform(e.head<3>(), ExpSO3(e.tail<3>()))).inverse() * X);
+    };
     const auto C = CameraPoseJacobian(X, T_PC, K);
     const Eigen::Matrix<double, 2, 6> N = CentralDifferences(pix);
-    EXPECT_LT((C - N).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, C.cwiseAbs().maxCoeff())) << C << "\n" << N;
+    EXPECT_LT((C - N).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, C.cwiseAbs().maxCoeff()))
+        << C << "\n"
+        << N;
   }
 }
 
@@ -677,7 +705,9 @@ TEST(Filter, FeaturesOfOneFrameShareTheCameraError) {
     return f;
   };
   const Vec3 axis = T_PC.linear().col(0);
-  const auto sigma_along = [&](const Filter& f) { return std::sqrt(axis.dot(f.covariance().topLeftCorner<3, 3>() * axis)); };
+  const auto sigma_along = [&](const Filter& f) {
+    return std::sqrt(axis.dot(f.covariance().topLeftCorner<3, 3>() * axis));
+  };
   const Filter independent = fused(0.0), shared = fused(0.002), nearly = fused(1e-9);
   EXPECT_LT(sigma_along(independent), 0.0003);
   EXPECT_GT(sigma_along(shared), 0.0015);
@@ -686,7 +716,8 @@ TEST(Filter, FeaturesOfOneFrameShareTheCameraError) {
   EXPECT_LT((nearly.covariance() - independent.covariance()).cwiseAbs().maxCoeff(), 1e-12);
   // Both move the object by the 1.5 mm the pixels show (against the camera's shift; the prior's
   // 20 mm leaves no reason not to), the shared one a little less far.
-  const double moved_independent = -axis.dot(independent.position() - p), moved_shared = -axis.dot(shared.position() - p);
+  const double moved_independent = -axis.dot(independent.position() - p),
+               moved_shared = -axis.dot(shared.position() - p);
   EXPECT_NEAR(moved_independent, 0.0015, 0.0001);
   EXPECT_GT(moved_shared, 0.0012);
   EXPECT_LT(moved_shared, moved_independent);
@@ -711,7 +742,8 @@ TEST(Filter, VisualModelSigmaBoundsWhatFramesOfFeaturesCanKnow) {
   // floor's, up to the share the orientation takes of each feature's variance.
   const Vec3 axis = T_PC.linear().col(0);
   const double z = (T_PC.inverse() * p).z();
-  const double sigma_px = K.fx / z * std::sqrt(axis.dot(f.covariance().topLeftCorner<3, 3>() * axis));
+  const double sigma_px =
+      K.fx / z * std::sqrt(axis.dot(f.covariance().topLeftCorner<3, 3>() * axis));
   EXPECT_GT(sigma_px, 0.5 * params.visual_model_sigma);
   EXPECT_LT(sigma_px, 1.5 * params.visual_model_sigma);
   EXPECT_NEAR(f.position().x(), p.x(), 1e-9);  // exact pixels: no bias from the floor
@@ -736,7 +768,9 @@ TEST(Filter, TheCameraErrorIsEstimatedAndKeptAcrossFrames) {
   f.Reset(At(p), s.q0, StartSigmas{1e-6, 1e-6, 1e-9, {}});
   EXPECT_EQ(f.UpdateVisual(features, T_PC, K), 40);
   // At 0.4 m a 1.5 mm shift and a 0.2 deg turn of the camera look alike: ξ is some mix of both.
-  EXPECT_GT(f.camera_error().head<3>().dot(offset) / offset.norm() + 0.4 * f.camera_error().tail<3>().norm(), 0.001);
+  EXPECT_GT(f.camera_error().head<3>().dot(offset) / offset.norm() +
+                0.4 * f.camera_error().tail<3>().norm(),
+            0.001);
   EXPECT_LT((f.position() - p).norm(), 1e-5);
   // The next frame's pixels are already explained: nothing left to correct.
   f.Predict(s.q0, 0.1);
@@ -756,16 +790,19 @@ TEST(Filter, WidenPoseAddsToThePoseVarianceOnly) {
   for (int i = 3; i < 6; ++i) EXPECT_NEAR(added(i, i), 0.1 * 0.1, 1e-15);
   added.diagonal().head<6>().setZero();
   EXPECT_EQ(added.cwiseAbs().maxCoeff(), 0.0);
-  for (const auto& [sp, so] : std::vector<std::pair<double, double>>{{-0.01, 0.0}, {0.0, std::nan("")}, {INFINITY, 0.0}})
+  for (const auto& [sp, so] :
+       std::vector<std::pair<double, double>>{{-0.01, 0.0}, {0.0, std::nan("")}, {INFINITY, 0.0}})
     EXPECT_THROW(f.WidenPose(sp, so), InputError);
 }
 
 // PoseError(a, b) is the error state that takes b to a: a = (p_b + δp, Exp(δθ) R_b).
 TEST(FilterJacobians, PoseErrorIsTheErrorStateBetweenTwoPoses) {
   const Transform b = MakeTransform(Vec3(0.01, -0.02, 0.05), ExpSO3(Vec3(0.4, -1.2, 2.0)));
-  for (const Vec6& d : {Vec6((Vec6() << 0.003, -0.01, 0.02, 0.1, -0.3, 0.2).finished()), Vec6(Vec6::Zero()),
-                        Vec6((Vec6() << 0.0, 0.0, 0.0, 0.0, 3.0, 0.0).finished())}) {
-    const Transform a = MakeTransform(b.translation() + d.head<3>(), ExpSO3(d.tail<3>()) * b.linear());
+  for (const Vec6& d :
+       {Vec6((Vec6() << 0.003, -0.01, 0.02, 0.1, -0.3, 0.2).finished()), Vec6(Vec6::Zero()),
+        Vec6((Vec6() << 0.0, 0.0, 0.0, 0.0, 3.0, 0.0).finished())}) {
+    const Transform a =
+        MakeTransform(b.translation() + d.head<3>(), ExpSO3(d.tail<3>()) * b.linear());
     EXPECT_LT((PoseError(a, b) - d).norm(), 1e-12) << d.transpose();
   }
 }
@@ -776,11 +813,13 @@ TEST(FilterJacobians, PoseErrorIsTheErrorStateBetweenTwoPoses) {
 // symmetric positive definite, or a pose that is not finite, is refused.
 TEST(Filter, RelocatePutsTheObjectWhereItWasMeasured) {
   FingerScene s;
-  Filter f = s.Started(At(Vec3(0.0, 0.07, 0.025)), PerfectContacts(), false);  // penetrating: a contact
+  Filter f =
+      s.Started(At(Vec3(0.0, 0.07, 0.025)), PerfectContacts(), false);  // penetrating: a contact
   f.Predict(s.q0, 0.001);
   f.UpdateContacts(Eigen::Vector2d::Zero());
   ASSERT_FALSE(f.state().active.empty());
-  ASSERT_GT(f.covariance().block(0, 6, 6, 2).cwiseAbs().maxCoeff(), 0.0);  // the pose is correlated with the biases
+  ASSERT_GT(f.covariance().block(0, 6, 6, 2).cwiseAbs().maxCoeff(),
+            0.0);  // the pose is correlated with the biases
   const Eigen::MatrixXd bias_block = f.covariance().bottomRightCorner(2, 2);
   const Transform T = MakeTransform(Vec3(0.01, 0.2, -0.03), ExpSO3(Vec3(0.3, -2.0, 0.5)));
   Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Random();
@@ -808,9 +847,12 @@ TEST(Filter, RelocatePutsTheObjectWhereItWasMeasured) {
 TEST(FilterOptions, AGyrationTensorMustBeSymmetricPositiveDefinite) {
   FingerScene s;
   EXPECT_NO_THROW(Filter(s.hand, s.query, FilterParams(), FilterOptions{false, Mat3::Zero()}));
-  EXPECT_NO_THROW(Filter(s.hand, s.query, FilterParams(), FilterOptions{false, Vec3(1e-5, 4e-4, 4e-4).asDiagonal()}));
-  for (const Mat3& bad : {Mat3(Vec3(1e-4, 1e-4, 0.0).asDiagonal()), Mat3(Vec3(1e-4, -1e-4, 1e-4).asDiagonal()),
-                          Mat3((Mat3() << 1e-4, 5e-5, 0, 0, 1e-4, 0, 0, 0, 1e-4).finished()), Mat3(Mat3::Constant(std::nan("")))}) {
+  EXPECT_NO_THROW(Filter(s.hand, s.query, FilterParams(),
+                         FilterOptions{false, Vec3(1e-5, 4e-4, 4e-4).asDiagonal()}));
+  for (const Mat3& bad :
+       {Mat3(Vec3(1e-4, 1e-4, 0.0).asDiagonal()), Mat3(Vec3(1e-4, -1e-4, 1e-4).asDiagonal()),
+        Mat3((Mat3() << 1e-4, 5e-5, 0, 0, 1e-4, 0, 0, 0, 1e-4).finished()),
+        Mat3(Mat3::Constant(std::nan("")))}) {
     try {
       Filter f(s.hand, s.query, FilterParams(), FilterOptions{false, bad});
       ADD_FAILURE() << bad;

@@ -26,7 +26,7 @@ namespace {
 struct Grasp {
   Eigen::VectorXd q;
   Transform T_PO;
-  int touching = 0;  // links within 0.3 mm of the object (or in it)
+  int touching = 0;   // links within 0.3 mm of the object (or in it)
   std::string links;  // their names
   double shift = 0.0;
 };
@@ -35,13 +35,15 @@ struct Grasp {
 // their lower limit towards the upper one; `fixed` sets some joints (the thumb's opposition).
 // The object is placed at the palm, moved out along the direction the fingers close in until the
 // open hand is clear of it, then every finger closes until a link it carries touches.
-Grasp CloseAround(const HandModel& hand, BulletContactQuery& query, const Aabb& object_box, const Mat3& R_PO,
-                  const std::map<std::string, double>& fixed, double extra_shift) {
+Grasp CloseAround(const HandModel& hand, BulletContactQuery& query, const Aabb& object_box,
+                  const Mat3& R_PO, const std::map<std::string, double>& fixed,
+                  double extra_shift) {
   const int n = hand.num_q();
   Eigen::VectorXd open(n), half(n), target(n);
   std::vector<bool> closes(static_cast<std::size_t>(n), false);
   for (int i = 0; i < n; ++i) {
-    const Joint& j = hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    const Joint& j =
+        hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
     const bool symmetric = std::abs(j.lower + j.upper) < 0.2 * (j.upper - j.lower);
     open[i] = half[i] = target[i] = symmetric ? 0.0 : j.lower + 0.05 * (j.upper - j.lower);
     if (!symmetric) {
@@ -71,9 +73,11 @@ Grasp CloseAround(const HandModel& hand, BulletContactQuery& query, const Aabb& 
   const Vec3 out = (centroid(half) - c_open).normalized();
   // From the palm's centre outwards: the object rests against the palm (a power grasp).
   Vec3 palm = Vec3::Zero();
-  for (const ConvexPiece& p : hand.links[static_cast<std::size_t>(hand.root_link)].collision) palm += p.bounding_center;
+  for (const ConvexPiece& p : hand.links[static_cast<std::size_t>(hand.root_link)].collision)
+    palm += p.bounding_center;
   if (!hand.links[static_cast<std::size_t>(hand.root_link)].collision.empty())
-    palm /= static_cast<double>(hand.links[static_cast<std::size_t>(hand.root_link)].collision.size());
+    palm /=
+        static_cast<double>(hand.links[static_cast<std::size_t>(hand.root_link)].collision.size());
   Grasp g;
   std::vector<ContactPair> pairs;
   kin.Update(hand, open);
@@ -114,7 +118,8 @@ Grasp CloseAround(const HandModel& hand, BulletContactQuery& query, const Aabb& 
   kin.Update(hand, g.q);
   query.Query(kin.link_poses(), g.T_PO, 3e-4, pairs);
   g.touching = static_cast<int>(pairs.size());
-  for (const ContactPair& p : pairs) g.links += hand.links[static_cast<std::size_t>(p.link)].name + " ";
+  for (const ContactPair& p : pairs)
+    g.links += hand.links[static_cast<std::size_t>(p.link)].name + " ";
   g.shift = shift;
   return g;
 }
@@ -122,13 +127,14 @@ Grasp CloseAround(const HandModel& hand, BulletContactQuery& query, const Aabb& 
 // The first grasp with `enough` touching links (else the one with the most) over placements 0-40 mm
 // beyond the first clear one, the object as given or tipped by 90 degrees about x, turned about z
 // in 45-degree steps.
-Grasp BestGrasp(const HandModel& hand, BulletContactQuery& query, const Aabb& object_box, const Mat3& R0,
-                const std::map<std::string, double>& fixed, int enough) {
+Grasp BestGrasp(const HandModel& hand, BulletContactQuery& query, const Aabb& object_box,
+                const Mat3& R0, const std::map<std::string, double>& fixed, int enough) {
   Grasp best;
   for (int tip = 0; tip < 2; ++tip)
     for (int turn = 0; turn < 4; ++turn)
       for (int extra = 0; extra <= 4; ++extra) {
-        const Mat3 R = ExpSO3(Vec3(0, 0, turn * M_PI / 4)) * ExpSO3(Vec3(tip * M_PI / 2, 0, 0)) * R0;
+        const Mat3 R =
+            ExpSO3(Vec3(0, 0, turn * M_PI / 4)) * ExpSO3(Vec3(tip * M_PI / 2, 0, 0)) * R0;
         const Grasp g = CloseAround(hand, query, object_box, R, fixed, 0.01 * extra);
         if (g.touching > best.touching) best = g;
         if (best.touching >= enough) return best;
@@ -155,9 +161,11 @@ HandModel ThickerHand(HandModel hand, double extra) {
     for (ConvexPiece& p : link.collision) {
       if (p.kind == ConvexPiece::Kind::kCapsule || p.kind == ConvexPiece::Kind::kSphere ||
           p.kind == ConvexPiece::Kind::kCylinder) {
-        p = p.kind == ConvexPiece::Kind::kCapsule    ? ConvexPiece::Capsule(p.radius + extra, p.half_length, p.T_BS)
-            : p.kind == ConvexPiece::Kind::kSphere   ? ConvexPiece::Sphere(p.radius + extra, p.T_BS)
-                                                     : ConvexPiece::Cylinder(p.radius + extra, p.half_length, p.T_BS);
+        p = p.kind == ConvexPiece::Kind::kCapsule
+                ? ConvexPiece::Capsule(p.radius + extra, p.half_length, p.T_BS)
+            : p.kind == ConvexPiece::Kind::kSphere
+                ? ConvexPiece::Sphere(p.radius + extra, p.T_BS)
+                : ConvexPiece::Cylinder(p.radius + extra, p.half_length, p.T_BS);
       } else if (p.kind == ConvexPiece::Kind::kBox) {
         p = ConvexPiece::Box(p.half_extents + Vec3::Constant(extra), p.T_BS);
       }
@@ -172,7 +180,8 @@ TEST(Grasp, ContradictoryContactsSettleAndStayConsistent) {
   const HandModel hand = LoadHandModel(root + "hands/inhand_hand/inhand_hand.urdf", options);
   const ObjectModel object = LoadObjectModel(root + "objects/water_bottle/object.json");
   BulletContactQuery truth_query(hand, object);
-  const Grasp g = BestGrasp(hand, truth_query, object.Bounds(), ExpSO3(Vec3(0, M_PI / 2, 0)), {{"thumb_abduction", 1.0}}, 6);
+  const Grasp g = BestGrasp(hand, truth_query, object.Bounds(), ExpSO3(Vec3(0, M_PI / 2, 0)),
+                            {{"thumb_abduction", 1.0}}, 6);
   ASSERT_GE(g.touching, 3) << "the fingers did not close on the object";
   std::printf("grasp: %s(shift %.3f)\n", g.links.c_str(), g.shift);
 
@@ -184,7 +193,9 @@ TEST(Grasp, ContradictoryContactsSettleAndStayConsistent) {
   double worst_nees = 0.0, nees_sum = 0.0;
   int nees_n = 0;
   Transform at_5s;
-  std::printf("t [s] | position error [mm] | orientation error [deg] | sigma_p [mm] | NEES | penetration [mm]\n");
+  std::printf(
+      "t [s] | position error [mm] | orientation error [deg] | sigma_p [mm] | NEES | penetration "
+      "[mm]\n");
   for (int k = 1; k <= 10000; ++k) {
     filter.Predict(g.q, 0.001);
     filter.UpdateContacts(tau);
@@ -196,9 +207,10 @@ TEST(Grasp, ContradictoryContactsSettleAndStayConsistent) {
         double deepest = 0.0;
         for (const auto& c : filter.trace().contacts) deepest = std::min(deepest, c.distance);
         const Vec6 e = PoseError(filter.T_PO(), g.T_PO);
-        std::printf("%4.1f | %5.2f | %5.2f | %5.2f | %6.2f | %5.2f\n", k * 1e-3, e.head<3>().norm() * 1e3,
-                    e.tail<3>().norm() * 180 / M_PI, std::sqrt(filter.covariance().topLeftCorner<3, 3>().trace() / 3) * 1e3,
-                    nees, -deepest * 1e3);
+        std::printf("%4.1f | %5.2f | %5.2f | %5.2f | %6.2f | %5.2f\n", k * 1e-3,
+                    e.head<3>().norm() * 1e3, e.tail<3>().norm() * 180 / M_PI,
+                    std::sqrt(filter.covariance().topLeftCorner<3, 3>().trace() / 3) * 1e3, nees,
+                    -deepest * 1e3);
       }
     }
     if (k == 5000) at_5s = filter.T_PO();
@@ -221,12 +233,14 @@ TEST(Grasp, AllegroStaticGraspsAroundYcbScans) {
   const std::string shared = test::SharedAssets();
   HandLoadOptions options;
   options.load_visual_meshes = false;
-  const HandModel hand = LoadHandModel(shared + "/hands/allegro_hand/allegro_hand_right.urdf", options);
+  const HandModel hand =
+      LoadHandModel(shared + "/hands/allegro_hand/allegro_hand_right.urdf", options);
   std::printf("object | run | start [mm, deg] | terminal [mm, deg]\n");
   for (const char* name : {"mustard_bottle", "bleach_cleanser", "large_marker"}) {
     const ObjectModel object = LoadObjectModel(shared + "/objects/ycb/" + name + ".urdf");
     BulletContactQuery query(hand, object);
-    const Grasp g = BestGrasp(hand, query, object.Bounds(), Mat3::Identity(), {{"joint_12.0", 1.3}}, 4);
+    const Grasp g =
+        BestGrasp(hand, query, object.Bounds(), Mat3::Identity(), {{"joint_12.0", 1.3}}, 4);
     std::printf("%s grasp: %s(shift %.3f)\n", name, g.links.c_str(), g.shift);
     ASSERT_GE(g.touching, 3) << name << ": the fingers did not close on the object";
     std::mt19937 rng(15);
@@ -236,7 +250,8 @@ TEST(Grasp, AllegroStaticGraspsAroundYcbScans) {
       Vec3 dp(normal(rng), normal(rng), normal(rng)), dr(normal(rng), normal(rng), normal(rng));
       dp = dp.normalized() * 0.010;
       dr = dr.normalized() * (5.0 * M_PI / 180);
-      const Transform start = MakeTransform(g.T_PO.translation() + dp, g.T_PO.linear() * ExpSO3(dr));
+      const Transform start =
+          MakeTransform(g.T_PO.translation() + dp, g.T_PO.linear() * ExpSO3(dr));
       Filter filter(hand, query, FilterParams(), FilterOptions{false});
       filter.Reset(start, g.q, StartSigmas{0.01, 5.0 * M_PI / 180, 1e-9, {}});
       const Eigen::VectorXd tau = Eigen::VectorXd::Zero(hand.num_q());
@@ -247,7 +262,8 @@ TEST(Grasp, AllegroStaticGraspsAroundYcbScans) {
       const Vec6 e0 = PoseError(start, g.T_PO), e1 = PoseError(filter.T_PO(), g.T_PO);
       const double p0 = e0.head<3>().norm(), p1 = e1.head<3>().norm();
       const double r0 = e0.tail<3>().norm(), r1 = e1.tail<3>().norm();
-      std::printf("%s | %d | %.1f, %.1f | %.1f, %.1f\n", name, run, p0 * 1e3, r0 * 180 / M_PI, p1 * 1e3, r1 * 180 / M_PI);
+      std::printf("%s | %d | %.1f, %.1f | %.1f, %.1f\n", name, run, p0 * 1e3, r0 * 180 / M_PI,
+                  p1 * 1e3, r1 * 180 / M_PI);
       better += p1 < p0;
       EXPECT_LT(p1, 2.0 * p0) << name << " run " << run;
       EXPECT_LT(r1, 2.0 * r0) << name << " run " << run;

@@ -1,11 +1,11 @@
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
-#include <map>
 #include <fstream>
+#include <map>
 
 #include "inhand/core/error.hpp"
 #include "inhand/io/mesh_io.hpp"
@@ -16,15 +16,20 @@ namespace {
 
 // Binary STL of a closed box [0,a]x[0,b]x[0,c] (outward winding).
 std::string BinaryStlBox(double a, double b, double c) {
-  const TriangleMesh box = ConvexPiece::Box(Vec3(a / 2, b / 2, c / 2),
-                                            MakeTransform(Vec3(a / 2, b / 2, c / 2), Mat3::Identity()))
-                               .ToMesh();
+  const TriangleMesh box =
+      ConvexPiece::Box(Vec3(a / 2, b / 2, c / 2),
+                       MakeTransform(Vec3(a / 2, b / 2, c / 2), Mat3::Identity()))
+          .ToMesh();
   std::string out(80, ' ');
-  const auto put_u32 = [&out](std::uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+  const auto put_u32 = [&out](std::uint32_t v) {
+    out.append(reinterpret_cast<const char*>(&v), 4);
+  };
   const auto put_f = [&out](float v) { out.append(reinterpret_cast<const char*>(&v), 4); };
   put_u32(static_cast<std::uint32_t>(box.triangles.size()));
   for (const auto& t : box.triangles) {
-    const Vec3 n = (box.vertices[t[1]] - box.vertices[t[0]]).cross(box.vertices[t[2]] - box.vertices[t[0]]).normalized();
+    const Vec3 n = (box.vertices[t[1]] - box.vertices[t[0]])
+                       .cross(box.vertices[t[2]] - box.vertices[t[0]])
+                       .normalized();
     for (int k = 0; k < 3; ++k) put_f(static_cast<float>(n[k]));
     for (int v = 0; v < 3; ++v)
       for (int k = 0; k < 3; ++k) put_f(static_cast<float>(box.vertices[t[v]][k]));
@@ -51,7 +56,8 @@ TEST(MeshIo, ObjWithMaterialsTextureAndTrailingSpace) {
   test::TempDir dir;
   dir.Write("tex.png", "not really a png, the loader only checks that it exists");
   // The texture line ends with a space, like YCB's .mtl files.
-  dir.Write("m.mtl", "newmtl red\nKd 1 0 0\nd 0.5\nnewmtl textured\nKd 0.8 0.8 0.8\nmap_Kd tex.png \n");
+  dir.Write("m.mtl",
+            "newmtl red\nKd 1 0 0\nd 0.5\nnewmtl textured\nKd 0.8 0.8 0.8\nmap_Kd tex.png \n");
   dir.Write("m.obj",
             "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\n"
             "usemtl red\nf 1 3 2\nf 1 2 4\nusemtl textured\nf 1/1 4/4 3/3\nf 2/2 3/3 4/4\n");
@@ -62,7 +68,8 @@ TEST(MeshIo, ObjWithMaterialsTextureAndTrailingSpace) {
   EXPECT_NEAR(red->material.rgba[0], 1.0, 1e-6);
   EXPECT_NEAR(red->material.rgba[3], 0.5, 1e-6);
   EXPECT_FALSE(red->material.HasTexture());
-  EXPECT_EQ(tex->material.texture_file, std::filesystem::weakly_canonical(dir / "tex.png").string());
+  EXPECT_EQ(tex->material.texture_file,
+            std::filesystem::weakly_canonical(dir / "tex.png").string());
   EXPECT_EQ(tex->uvs.size(), tex->vertices.size());
 
   dir.Write("missing.mtl", "newmtl t\nmap_Kd nowhere.png\n");
@@ -79,9 +86,12 @@ TEST(MeshIo, ObjWithMaterialsTextureAndTrailingSpace) {
 TEST(MeshIo, WrittenObjReadsBackThroughAssimp) {
   test::TempDir dir;
   dir.Write("tex.png", "a texture file");
-  TriangleMesh a = ConvexPiece::Box(Vec3(0.01, 0.02, 0.03), MakeTransform(Vec3(0.1, 0, 0), Mat3::Identity())).ToMesh();
+  TriangleMesh a =
+      ConvexPiece::Box(Vec3(0.01, 0.02, 0.03), MakeTransform(Vec3(0.1, 0, 0), Mat3::Identity()))
+          .ToMesh();
   a.uvs.clear();
-  for (const Vec3& v : a.vertices) a.uvs.emplace_back(v.y() > 0 ? 1.0 : 0.0, v.z() > 0 ? 0.75 : 0.25);
+  for (const Vec3& v : a.vertices)
+    a.uvs.emplace_back(v.y() > 0 ? 1.0 : 0.0, v.z() > 0 ? 0.75 : 0.25);
   a.material.rgba = Eigen::Vector4d(0.9, 0.2, 0.1, 1.0);
   TriangleMesh b = ConvexPiece::Sphere(0.02, Transform::Identity()).ToMesh();
   b.material.rgba = Eigen::Vector4d(0.1, 0.3, 0.8, 0.5);
@@ -101,7 +111,8 @@ TEST(MeshIo, WrittenObjReadsBackThroughAssimp) {
   for (std::size_t i = 0; i < a.vertices.size(); ++i) {
     bool found = false;
     for (std::size_t j = 0; j < ta.vertices.size() && !found; ++j)
-      found = (ta.vertices[j] - a.vertices[i]).norm() < 1e-8 && std::abs(ta.uvs[j].x() - a.uvs[i].x()) < 1e-8;
+      found = (ta.vertices[j] - a.vertices[i]).norm() < 1e-8 &&
+              std::abs(ta.uvs[j].x() - a.uvs[i].x()) < 1e-8;
     EXPECT_TRUE(found) << "vertex " << i;
   }
   EXPECT_NEAR(ComputeMassProperties({&tb}).volume, ComputeMassProperties({&b}).volume, 1e-12);
@@ -111,7 +122,9 @@ TEST(MeshIo, WrittenObjReadsBackThroughAssimp) {
 // hulls whose volumes add up to the cylinder's (0.03 % lost to the hull computer's rounding);
 // at most max_slabs are cut.
 TEST(MeshIo, SlabHullsCutASolidAcrossItsLongestAxis) {
-  const TriangleMesh cyl = ConvexPiece::Cylinder(0.015, 0.05, MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, M_PI / 2, 0)))).ToMesh();
+  const TriangleMesh cyl =
+      ConvexPiece::Cylinder(0.015, 0.05, MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, M_PI / 2, 0))))
+          .ToMesh();
   const double v = ComputeMassProperties({&cyl}).volume;
   const std::vector<ConvexPiece> five = SlabHulls({cyl}, 0.02, 8, "cylinder");
   ASSERT_EQ(five.size(), 5u);
@@ -204,12 +217,18 @@ TriangleMesh VoxelL() {
     for (int j = 0; j < 4; ++j)
       for (int k = 0; k < 2; ++k) {
         if (!occupied(i, j, k)) continue;
-        if (!occupied(i + 1, j, k)) quad({{{i + 1, j, k}, {i + 1, j + 1, k}, {i + 1, j + 1, k + 1}, {i + 1, j, k + 1}}});
-        if (!occupied(i - 1, j, k)) quad({{{i, j, k}, {i, j, k + 1}, {i, j + 1, k + 1}, {i, j + 1, k}}});
-        if (!occupied(i, j + 1, k)) quad({{{i, j + 1, k}, {i, j + 1, k + 1}, {i + 1, j + 1, k + 1}, {i + 1, j + 1, k}}});
-        if (!occupied(i, j - 1, k)) quad({{{i, j, k}, {i + 1, j, k}, {i + 1, j, k + 1}, {i, j, k + 1}}});
-        if (!occupied(i, j, k + 1)) quad({{{i, j, k + 1}, {i + 1, j, k + 1}, {i + 1, j + 1, k + 1}, {i, j + 1, k + 1}}});
-        if (!occupied(i, j, k - 1)) quad({{{i, j, k}, {i, j + 1, k}, {i + 1, j + 1, k}, {i + 1, j, k}}});
+        if (!occupied(i + 1, j, k))
+          quad({{{i + 1, j, k}, {i + 1, j + 1, k}, {i + 1, j + 1, k + 1}, {i + 1, j, k + 1}}});
+        if (!occupied(i - 1, j, k))
+          quad({{{i, j, k}, {i, j, k + 1}, {i, j + 1, k + 1}, {i, j + 1, k}}});
+        if (!occupied(i, j + 1, k))
+          quad({{{i, j + 1, k}, {i, j + 1, k + 1}, {i + 1, j + 1, k + 1}, {i + 1, j + 1, k}}});
+        if (!occupied(i, j - 1, k))
+          quad({{{i, j, k}, {i + 1, j, k}, {i + 1, j, k + 1}, {i, j, k + 1}}});
+        if (!occupied(i, j, k + 1))
+          quad({{{i, j, k + 1}, {i + 1, j, k + 1}, {i + 1, j + 1, k + 1}, {i, j + 1, k + 1}}});
+        if (!occupied(i, j, k - 1))
+          quad({{{i, j, k}, {i, j + 1, k}, {i + 1, j + 1, k}, {i + 1, j, k}}});
       }
   return m;
 }

@@ -18,10 +18,11 @@ struct Expected {
 };
 
 TEST(Objects, ProjectObjectsLoadWithPiecesMassAndTags) {
-  const std::vector<Expected> objects = {
-      {"ketchup_bottle", 3, 2, 0.62, 0.204}, {"brush", 3, 1, 0.14, 0.214},
-      {"water_bottle", 3, 2, 0.53, 0.232},   {"shampoo_bottle", 6, 2, 0.30, 0.218},
-      {"pen", 2, 0, 0.016, 0.145}};
+  const std::vector<Expected> objects = {{"ketchup_bottle", 3, 2, 0.62, 0.204},
+                                         {"brush", 3, 1, 0.14, 0.214},
+                                         {"water_bottle", 3, 2, 0.53, 0.232},
+                                         {"shampoo_bottle", 6, 2, 0.30, 0.218},
+                                         {"pen", 2, 0, 0.016, 0.145}};
   for (const Expected& e : objects) {
     const ObjectModel o = LoadObjectModel(test::ProjectAsset("objects/" + e.file + "/object.json"));
     EXPECT_EQ(o.name, e.file);
@@ -36,8 +37,11 @@ TEST(Objects, ProjectObjectsLoadWithPiecesMassAndTags) {
     EXPECT_LE(I[2], I[0] + I[1] + 1e-12) << e.file;
     // Centre of mass inside the bounding box.
     const Aabb box = o.Bounds();
-    EXPECT_TRUE((o.com_O.array() >= box.min.array()).all() && (o.com_O.array() <= box.max.array()).all()) << e.file;
-    for (const TriangleMesh& m : o.visual) EXPECT_TRUE(IsClosed(m, 1e-7)) << e.file << " " << m.material.name;
+    EXPECT_TRUE((o.com_O.array() >= box.min.array()).all() &&
+                (o.com_O.array() <= box.max.array()).all())
+        << e.file;
+    for (const TriangleMesh& m : o.visual)
+      EXPECT_TRUE(IsClosed(m, 1e-7)) << e.file << " " << m.material.name;
   }
 }
 
@@ -47,11 +51,11 @@ TEST(Objects, TagCornersFollowTheDetectorOrder) {
   const TagPlacement& tag = o.tags.at(0);
   EXPECT_EQ(tag.id, 0);
   const auto c = tag.CornersO();
-  EXPECT_LT(c[0].x(), c[1].x());                      // bottom-left left of bottom-right
-  EXPECT_LT(c[0].z(), c[3].z());                      // bottom below top
+  EXPECT_LT(c[0].x(), c[1].x());  // bottom-left left of bottom-right
+  EXPECT_LT(c[0].z(), c[3].z());  // bottom below top
   EXPECT_NEAR((c[1] - c[0]).norm(), tag.size, 1e-12);
   EXPECT_NEAR((c[2] - c[0]).norm(), tag.size * std::sqrt(2.0), 1e-12);
-  EXPECT_LT(tag.T_OT.linear().col(2).y(), -0.99);      // normal out of the face
+  EXPECT_LT(tag.T_OT.linear().col(2).y(), -0.99);  // normal out of the face
   // The tag lies on the bottle's surface, within a millimetre.
   EXPECT_NEAR(c[0].y(), o.Bounds().min.y(), 1e-3);
 }
@@ -66,7 +70,11 @@ TEST(Objects, BrushIsNonConvex) {
     pieces_volume += ComputeMassProperties({&m}).volume;
     all.insert(all.end(), p.hull_vertices.begin(), p.hull_vertices.end());
   }
-  const Aabb box = [&] { Aabb b; for (const Vec3& v : all) b.Extend(v); return b; }();
+  const Aabb box = [&] {
+    Aabb b;
+    for (const Vec3& v : all) b.Extend(v);
+    return b;
+  }();
   EXPECT_LT(pieces_volume, 0.5 * box.Size().prod());
 }
 
@@ -82,18 +90,32 @@ TEST(Objects, BadDescriptionsNameFileAndField) {
       EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
     }
   };
-  expect("{\"name\": \"x\", \"visual\": [{\"mesh\": \"cube.obj\"}], \"collision\": [{\"mesh\": \"cube.obj\"}], "
-         "\"mass\": -1}", "field 'mass'");
-  expect("{\"name\": \"x\", \"visual\": [{\"mesh\": \"gone.obj\"}], \"collision\": [], \"mass\": 1}", "gone.obj");
+  expect(
+      "{\"name\": \"x\", \"visual\": [{\"mesh\": \"cube.obj\"}], \"collision\": [{\"mesh\": "
+      "\"cube.obj\"}], "
+      "\"mass\": -1}",
+      "field 'mass'");
+  expect(
+      "{\"name\": \"x\", \"visual\": [{\"mesh\": \"gone.obj\"}], \"collision\": [], \"mass\": 1}",
+      "gone.obj");
   expect("{\"name\": \"x\",\n \"visual\": [,]}", "o.json:2");
-  expect("{\"name\": \"x\", \"visual\": [], \"collision\": [{\"mesh\": \"cube.obj\", \"method\": \"magic\"}], "
-         "\"mass\": 1}", "'magic'");
-  expect("{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
-         "\"tags\": [{\"id\": 1, \"size\": 0.02}]}", "tags[0].pose");
-  expect("{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
-         "\"tags\": [{\"id\": 1, \"size\": 0.02, \"pose\": {\"quat_wxyz\": [2, 0, 0, 0]}}]}", "unit quaternion");
-  expect("{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
-         "\"inertia\": {\"ixx\": 1, \"iyy\": 1, \"izz\": 1, \"ixy\": 2}}", "field 'inertia' is not positive definite");
+  expect(
+      "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"mesh\": \"cube.obj\", \"method\": "
+      "\"magic\"}], "
+      "\"mass\": 1}",
+      "'magic'");
+  expect(
+      "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+      "\"tags\": [{\"id\": 1, \"size\": 0.02}]}",
+      "tags[0].pose");
+  expect(
+      "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+      "\"tags\": [{\"id\": 1, \"size\": 0.02, \"pose\": {\"quat_wxyz\": [2, 0, 0, 0]}}]}",
+      "unit quaternion");
+  expect(
+      "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+      "\"inertia\": {\"ixx\": 1, \"iyy\": 1, \"izz\": 1, \"ixy\": 2}}",
+      "field 'inertia' is not positive definite");
   EXPECT_THROW(LoadObjectModel(dir / "cube.obj"), InputError);  // not a description
 }
 
@@ -111,7 +133,8 @@ TEST(Objects, YcbUrdfObjectsUseTheirStoredDecomposition) {
     EXPECT_EQ(o.visual[0].uvs.size(), o.visual[0].vertices.size());
     // Pieces and the visual scan describe the same object (within a centimetre).
     Aabb pieces;
-    for (const ConvexPiece& p : o.pieces) for (const Vec3& v : p.hull_vertices) pieces.Extend(v);
+    for (const ConvexPiece& p : o.pieces)
+      for (const Vec3& v : p.hull_vertices) pieces.Extend(v);
     EXPECT_LT((pieces.Center() - o.Bounds().Center()).norm(), 0.01) << name;
   }
 }

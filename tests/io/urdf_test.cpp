@@ -62,8 +62,9 @@ void ExpectInputError(F&& f, const std::vector<std::string>& fragments) {
 }
 
 TEST(Urdf, MalformedXmlNamesTheLine) {
-  ExpectInputError([] { ParseHandModel("<robot name='r'>\n<link name='a'>\n</robot>", ".", "bad.urdf"); },
-                   {"bad.urdf:", "malformed XML"});
+  ExpectInputError(
+      [] { ParseHandModel("<robot name='r'>\n<link name='a'>\n</robot>", ".", "bad.urdf"); },
+      {"bad.urdf:", "malformed XML"});
 }
 
 TEST(Urdf, RevoluteWithoutLimitNamesTheJointAndLine) {
@@ -86,7 +87,8 @@ TEST(Urdf, UnsupportedJointTypeAndZeroAxis) {
 
 TEST(Urdf, InvalidUrdfStructureCarriesUrdfdomsReason) {
   const std::string no_root = "<robot name='r'></robot>";
-  ExpectInputError([&] { ParseHandModel(no_root, ".", "empty.urdf"); }, {"empty.urdf", "invalid URDF"});
+  ExpectInputError([&] { ParseHandModel(no_root, ".", "empty.urdf"); },
+                   {"empty.urdf", "invalid URDF"});
   const std::string bad_parent =
       "<robot name='r'><link name='a'/><link name='b'/><joint name='j' type='fixed'>"
       "<parent link='nowhere'/><child link='b'/></joint></robot>";
@@ -95,10 +97,16 @@ TEST(Urdf, InvalidUrdfStructureCarriesUrdfdomsReason) {
 
 TEST(Urdf, MissingMeshAndUnknownPackage) {
   test::TempDir dir;
-  ExpectInputError([&] { ParseHandModel(OneLinkUrdf("<mesh filename='meshes/nope.stl'/>"), dir.path(), "h.urdf"); },
-                   {"h.urdf", "meshes/nope.stl", "not found"});
   ExpectInputError(
-      [&] { ParseHandModel(OneLinkUrdf("<mesh filename='package://ghost_pkg/m.stl'/>"), dir.path(), "h.urdf"); },
+      [&] {
+        ParseHandModel(OneLinkUrdf("<mesh filename='meshes/nope.stl'/>"), dir.path(), "h.urdf");
+      },
+      {"h.urdf", "meshes/nope.stl", "not found"});
+  ExpectInputError(
+      [&] {
+        ParseHandModel(OneLinkUrdf("<mesh filename='package://ghost_pkg/m.stl'/>"), dir.path(),
+                       "h.urdf");
+      },
       {"unknown package 'ghost_pkg'", "--package ghost_pkg=DIR"});
   EXPECT_THROW(LoadHandModel(dir / "does_not_exist.urdf"), InputError);
 }
@@ -106,14 +114,19 @@ TEST(Urdf, MissingMeshAndUnknownPackage) {
 TEST(Urdf, MeshPathsRelativeAbsoluteFileAndPackage) {
   test::TempDir dir;
   dir.Write("my_pkg/meshes/tetra.stl", kTetraStl);
-  dir.Write("my_pkg/urdf/rel.urdf", OneLinkUrdf("<mesh filename='../meshes/tetra.stl' scale='2 2 2'/>"));
-  dir.Write("my_pkg/urdf/abs.urdf", OneLinkUrdf("<mesh filename='" + (dir / "my_pkg/meshes/tetra.stl") + "'/>"));
-  dir.Write("my_pkg/urdf/file.urdf", OneLinkUrdf("<mesh filename='file://" + (dir / "my_pkg/meshes/tetra.stl") + "'/>"));
+  dir.Write("my_pkg/urdf/rel.urdf",
+            OneLinkUrdf("<mesh filename='../meshes/tetra.stl' scale='2 2 2'/>"));
+  dir.Write("my_pkg/urdf/abs.urdf",
+            OneLinkUrdf("<mesh filename='" + (dir / "my_pkg/meshes/tetra.stl") + "'/>"));
+  dir.Write("my_pkg/urdf/file.urdf",
+            OneLinkUrdf("<mesh filename='file://" + (dir / "my_pkg/meshes/tetra.stl") + "'/>"));
   // Default package search: a parent folder named like the package.
-  dir.Write("my_pkg/urdf/pkg.urdf", OneLinkUrdf("<mesh filename='package://my_pkg/meshes/tetra.stl'/>"));
+  dir.Write("my_pkg/urdf/pkg.urdf",
+            OneLinkUrdf("<mesh filename='package://my_pkg/meshes/tetra.stl'/>"));
   // Explicit map for a package whose folder has another name.
   dir.Write("elsewhere/meshes/tetra.stl", kTetraStl);
-  dir.Write("my_pkg/urdf/mapped.urdf", OneLinkUrdf("<mesh filename='package://other/meshes/tetra.stl'/>"));
+  dir.Write("my_pkg/urdf/mapped.urdf",
+            OneLinkUrdf("<mesh filename='package://other/meshes/tetra.stl'/>"));
 
   for (const char* name : {"rel", "abs", "file", "pkg"}) {
     const HandModel h = LoadHandModel(dir / ("my_pkg/urdf/" + std::string(name) + ".urdf"));
@@ -137,7 +150,8 @@ TEST(Urdf, GeometryFallbacksAndCapsuleMerge) {
   const std::string xml =
       "<robot name='r'><link name='palm'><collision><geometry><box size='0.1 0.2 0.03'/></geometry>"
       "</collision></link><link name='f'>"
-      "<collision><origin xyz='0 0 0.02'/><geometry><cylinder radius='0.01' length='0.04'/></geometry></collision>"
+      "<collision><origin xyz='0 0 0.02'/><geometry><cylinder radius='0.01' "
+      "length='0.04'/></geometry></collision>"
       "<collision><origin xyz='0 0 0'/><geometry><sphere radius='0.01'/></geometry></collision>"
       "<collision><origin xyz='0 0 0.04'/><geometry><sphere radius='0.01'/></geometry></collision>"
       "</link><joint name='j' type='revolute'><parent link='palm'/><child link='f'/>"
@@ -159,15 +173,17 @@ TEST(Urdf, MimicChainsCompose) {
       "<joint name='j1' type='revolute'><parent link='a'/><child link='b'/><axis xyz='0 0 1'/>"
       "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
       "<joint name='j2' type='revolute'><parent link='b'/><child link='c'/><axis xyz='0 0 1'/>"
-      "<limit lower='-1' upper='1' effort='1' velocity='1'/><mimic joint='j1' multiplier='2' offset='0.1'/></joint>"
+      "<limit lower='-1' upper='1' effort='1' velocity='1'/><mimic joint='j1' multiplier='2' "
+      "offset='0.1'/></joint>"
       "<joint name='j3' type='revolute'><parent link='c'/><child link='d'/><axis xyz='0 0 1'/>"
-      "<limit lower='-1' upper='1' effort='1' velocity='1'/><mimic joint='j2' multiplier='3' offset='0.2'/></joint>"
+      "<limit lower='-1' upper='1' effort='1' velocity='1'/><mimic joint='j2' multiplier='3' "
+      "offset='0.2'/></joint>"
       "</robot>";
   const HandModel h = ParseHandModel(xml, ".", "m.urdf");
   ASSERT_EQ(h.num_q(), 1);
   const Joint& j3 = h.joints[h.JointIndex("j3")];
   EXPECT_EQ(j3.q_index, 0);
-  EXPECT_NEAR(j3.multiplier, 6.0, 1e-15);       // 3 * 2
+  EXPECT_NEAR(j3.multiplier, 6.0, 1e-15);        // 3 * 2
   EXPECT_NEAR(j3.offset, 3 * 0.1 + 0.2, 1e-15);  // 3 * (2 q + 0.1) + 0.2
   const std::string cycle =
       "<robot name='r'><link name='a'/><link name='b'/><link name='c'/>"
@@ -213,7 +229,8 @@ TEST(Urdf, SharedHandsJointCounts) {
 
 TEST(Urdf, ShadowMillimetreMeshesAreScaledToMetres) {
   INHAND_REQUIRE_SHARED_ASSETS();
-  const HandModel h = LoadHandModel(test::SharedAssets() + "/hands/shadow_hand/shadow_hand_right.urdf");
+  const HandModel h =
+      LoadHandModel(test::SharedAssets() + "/hands/shadow_hand/shadow_hand_right.urdf");
   // A distal phalanx is a few centimetres long, whatever unit its file is in.
   for (const char* name : {"ffdistal", "thdistal", "palm"}) {
     const Link& l = h.links[h.LinkIndex(name)];
@@ -237,7 +254,8 @@ TEST(Urdf, AllegroGlbAndObjMeshesAgree) {
   for (std::size_t l = 0; l < obj.links.size(); ++l) {
     Aabb a, b;
     for (const TriangleMesh& m : obj.links[l].visual) a.Extend(m.Bounds());
-    for (const TriangleMesh& m : glb.links[glb.LinkIndex(obj.links[l].name)].visual) b.Extend(m.Bounds());
+    for (const TriangleMesh& m : glb.links[glb.LinkIndex(obj.links[l].name)].visual)
+      b.Extend(m.Bounds());
     if (a.Empty()) continue;
     EXPECT_LT((a.min - b.min).norm() + (a.max - b.max).norm(), 1e-4) << obj.links[l].name;
   }
@@ -245,10 +263,11 @@ TEST(Urdf, AllegroGlbAndObjMeshesAgree) {
 
 TEST(Urdf, OriginalAllegroStlMeshesResolveThroughPackage) {
   INHAND_REQUIRE_SHARED_ASSETS();
-  const HandModel h = LoadHandModel(test::SharedAssets() +
-                                    "/hands/allegro_hand_description/allegro_hand_description_right.urdf");
+  const HandModel h = LoadHandModel(
+      test::SharedAssets() + "/hands/allegro_hand_description/allegro_hand_description_right.urdf");
   ASSERT_FALSE(h.mesh_files.empty());
-  for (const std::string& f : h.mesh_files) EXPECT_NE(f.find("allegro_hand_description/meshes/"), std::string::npos);
+  for (const std::string& f : h.mesh_files)
+    EXPECT_NE(f.find("allegro_hand_description/meshes/"), std::string::npos);
   // URDF colour wins when the mesh file has none (binary STL).
   const Link& base = h.links[h.LinkIndex("base_link")];
   ASSERT_FALSE(base.visual.empty());

@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
+#include "alloc_counter.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
-#include "alloc_counter.hpp"
 #include "test_support.hpp"
 
 namespace inhand {
@@ -48,7 +48,9 @@ void CheckJacobians(const HandModel& hand, int configurations) {
         N.col(i) = (pa - pb) / (2 * h);
       }
       ASSERT_LT((J - N).cwiseAbs().maxCoeff(), 1e-8)
-          << hand.name << " link " << hand.links[l].name << "\nJ=\n" << J << "\nN=\n" << N;
+          << hand.name << " link " << hand.links[l].name << "\nJ=\n"
+          << J << "\nN=\n"
+          << N;
       ++checked;
     }
   }
@@ -97,7 +99,9 @@ TEST(Kinematics, InlineHandWithMimicPrismaticContinuousAndFixed) {
   EXPECT_NEAR(data.joint_value(hand.JointIndex("ja2")), -0.7 * 0.4 + 0.2, 1e-15);
   // Prismatic: b1 slides along its axis.
   const Vec3 axis_b = RotationFromRpy(Vec3(0, 0.5, 0)) * Vec3::UnitY();
-  EXPECT_LT((data.T_PL(hand.LinkIndex("b1")).translation() - (Vec3(-0.02, 0, 0) + 0.01 * axis_b)).norm(), 1e-15);
+  EXPECT_LT(
+      (data.T_PL(hand.LinkIndex("b1")).translation() - (Vec3(-0.02, 0, 0) + 0.01 * axis_b)).norm(),
+      1e-15);
 }
 
 TEST(Kinematics, RootJacobianIsZeroAndOutsideChainColumnsAreZero) {
@@ -150,13 +154,14 @@ TEST(Kinematics, ProjectHandClosesTowardsThePalmSide) {
   EXPECT_GT(index_closed.z(), index_open.z() + 0.04);
   EXPECT_LT(index_closed.y(), index_open.y() - 0.03);
   q[hand.joints[hand.JointIndex("thumb_abduction")].q_index] = 0.3;
-  for (int k = 1; k <= 3; ++k) q[hand.joints[hand.JointIndex("thumb_flex" + std::to_string(k))].q_index] = 0.8;
+  for (int k = 1; k <= 3; ++k)
+    q[hand.joints[hand.JointIndex("thumb_flex" + std::to_string(k))].q_index] = 0.8;
   data.Update(hand, q);
   const Vec3 thumb = data.T_PL(hand.LinkIndex("thumb_tip")).translation();
-  EXPECT_GT(thumb.z(), 0.02);                   // in front of the palm
-  EXPECT_GT(thumb.y(), 0.03);                   // towards the fingers, not the wrist
+  EXPECT_GT(thumb.z(), 0.02);  // in front of the palm
+  EXPECT_GT(thumb.y(), 0.03);  // towards the fingers, not the wrist
   EXPECT_LT(thumb.y(), index_open.y());
-  EXPECT_LT(thumb.x(), 0.036 + 0.01);           // curled back over the palm
+  EXPECT_LT(thumb.x(), 0.036 + 0.01);  // curled back over the palm
 }
 
 TEST(Kinematics, SharedHandsJacobians) {
@@ -176,7 +181,8 @@ TEST(Kinematics, TwoAllegroDescriptionsGiveTheSameJointFrames) {
   const std::string hands = test::SharedAssets() + "/hands/";
   // dex-urdf (relative OBJ paths) and the original description (package:// STL paths).
   const HandModel a = LoadHandModel(hands + "allegro_hand/allegro_hand_right.urdf");
-  const HandModel b = LoadHandModel(hands + "allegro_hand_description/allegro_hand_description_right.urdf");
+  const HandModel b =
+      LoadHandModel(hands + "allegro_hand_description/allegro_hand_description_right.urdf");
   ASSERT_EQ(a.num_q(), 16);
   ASSERT_EQ(b.num_q(), 16);
   ASSERT_EQ(a.QNames(), b.QNames());
@@ -188,7 +194,8 @@ TEST(Kinematics, TwoAllegroDescriptionsGiveTheSameJointFrames) {
     for (const std::string& name : a.QNames()) {
       const Joint& ja = a.joints[a.JointIndex(name)];
       const Joint& jb = b.joints[b.JointIndex(name)];
-      const double err = (da.T_PL(ja.child_link).matrix() - db.T_PL(jb.child_link).matrix()).cwiseAbs().maxCoeff();
+      const double err =
+          (da.T_PL(ja.child_link).matrix() - db.T_PL(jb.child_link).matrix()).cwiseAbs().maxCoeff();
       EXPECT_LT(err, 1e-9) << name;
     }
   }

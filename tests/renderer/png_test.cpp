@@ -22,7 +22,8 @@ Image8 CameraLike(int w, int h, int channels, unsigned seed) {
     for (int x = 0; x < w; ++x)
       for (int c = 0; c < channels; ++c) {
         const bool inside = std::hypot(x - w / 2, y - h / 2) < h / 4;
-        const double v = (inside ? 180 : 60) + 40 * std::sin(0.01 * x + c) + 30 * std::cos(0.013 * y) + noise(rng);
+        const double v = (inside ? 180 : 60) + 40 * std::sin(0.01 * x + c) +
+                         30 * std::cos(0.013 * y) + noise(rng);
         img.pixel(x, y)[c] = static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
       }
   return img;
@@ -30,7 +31,9 @@ Image8 CameraLike(int w, int h, int channels, unsigned seed) {
 
 void ExpectDecodesTo(const Image8& img, const std::string& what) {
   const std::vector<std::uint8_t> png = EncodePng(img);
-  const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(png.size()), CV_8UC1, const_cast<std::uint8_t*>(png.data())), cv::IMREAD_UNCHANGED);
+  const cv::Mat decoded = cv::imdecode(
+      cv::Mat(1, static_cast<int>(png.size()), CV_8UC1, const_cast<std::uint8_t*>(png.data())),
+      cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(decoded.empty()) << what;
   ASSERT_EQ(decoded.cols, img.width) << what;
   ASSERT_EQ(decoded.rows, img.height) << what;
@@ -38,7 +41,8 @@ void ExpectDecodesTo(const Image8& img, const std::string& what) {
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x)
       for (int c = 0; c < img.channels; ++c) {
-        const std::uint8_t got = decoded.ptr<std::uint8_t>(y)[x * img.channels + (img.channels == 3 ? 2 - c : 0)];  // BGR
+        const std::uint8_t got = decoded.ptr<std::uint8_t>(
+            y)[x * img.channels + (img.channels == 3 ? 2 - c : 0)];  // BGR
         ASSERT_EQ(got, img.pixel(x, y)[c]) << what << " at " << x << "," << y << " channel " << c;
       }
 }
@@ -55,7 +59,8 @@ TEST(EncodePng, LibpngDecodesExactlyWhatWasEncoded) {
   for (auto& b : noise.data) b = static_cast<std::uint8_t>(rng());
   ExpectDecodesTo(noise, "uniform noise (every symbol, long codes)");
   Image8 skewed(300, 200, 3);  // a few very rare residuals among very common ones: deep trees
-  for (std::size_t i = 0; i < skewed.data.size(); ++i) skewed.data[i] = static_cast<std::uint8_t>(i % 9973 == 0 ? (i * 7) & 255 : (i / 3) % 2);
+  for (std::size_t i = 0; i < skewed.data.size(); ++i)
+    skewed.data[i] = static_cast<std::uint8_t>(i % 9973 == 0 ? (i * 7) & 255 : (i / 3) % 2);
   ExpectDecodesTo(skewed, "skewed residuals");
 }
 
@@ -66,7 +71,8 @@ TEST(EncodePng, AboutAsSmallAsLibpng) {
   const cv::Mat m(img.height, img.width, CV_8UC3, const_cast<std::uint8_t*>(img.data.data()));
   cv::imencode(".png", m, theirs, {cv::IMWRITE_PNG_COMPRESSION, 1});
   EXPECT_LT(ours.size(), img.data.size() * 3 / 5) << "no better than storing";
-  EXPECT_LT(static_cast<double>(ours.size()), 1.15 * static_cast<double>(theirs.size())) << ours.size() << " vs libpng's " << theirs.size();
+  EXPECT_LT(static_cast<double>(ours.size()), 1.15 * static_cast<double>(theirs.size()))
+      << ours.size() << " vs libpng's " << theirs.size();
 }
 
 }  // namespace

@@ -57,7 +57,9 @@ double SignedDistance(const std::vector<Vec2>& poly, const Vec2& p) {
 }
 
 std::vector<Vec2> ConvexHull2d(std::vector<Vec2> pts) {
-  std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
   std::vector<Vec2> hull;
   const auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
     return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
@@ -65,7 +67,8 @@ std::vector<Vec2> ConvexHull2d(std::vector<Vec2> pts) {
   for (int pass = 0; pass < 2; ++pass) {
     const std::size_t start = hull.size();
     for (const Vec2& p : pts) {
-      while (hull.size() >= start + 2 && cross(hull[hull.size() - 2], hull.back(), p) <= 0) hull.pop_back();
+      while (hull.size() >= start + 2 && cross(hull[hull.size() - 2], hull.back(), p) <= 0)
+        hull.pop_back();
       hull.push_back(p);
     }
     hull.pop_back();
@@ -81,7 +84,8 @@ TEST(Renderer, SilhouetteAgreesWithTheEstimatorsProjection) {
   const int id = r.AddMesh(box);
   const Intrinsics K = Camera();
   for (int trial = 0; trial < 5; ++trial) {
-    const Transform T_PO = MakeTransform(Vec3(0.01 * trial - 0.02, 0.005 * trial, 0.02), ExpSO3(Vec3(0.3 + trial, -0.7, 0.2 * trial)));
+    const Transform T_PO = MakeTransform(Vec3(0.01 * trial - 0.02, 0.005 * trial, 0.02),
+                                         ExpSO3(Vec3(0.3 + trial, -0.7, 0.2 * trial)));
     const Transform T_PC = MakeTransform(Vec3(0.0, 0.0, -0.4), Mat3::Identity());
     Scene scene;
     scene.K = K;
@@ -98,10 +102,12 @@ TEST(Renderer, SilhouetteAgreesWithTheEstimatorsProjection) {
         const double d = SignedDistance(silhouette, Vec2(x, y));
         const bool in_mask = out.label_at(x, y) == kObjectLabel;
         if (d > 0.5) {
-          ASSERT_TRUE(in_mask) << "pixel (" << x << ", " << y << ") is " << d << " px inside, not drawn";
+          ASSERT_TRUE(in_mask) << "pixel (" << x << ", " << y << ") is " << d
+                               << " px inside, not drawn";
           ++checked;
         } else if (d < -0.5) {
-          ASSERT_FALSE(in_mask) << "pixel (" << x << ", " << y << ") is " << -d << " px outside, drawn";
+          ASSERT_FALSE(in_mask) << "pixel (" << x << ", " << y << ") is " << -d
+                                << " px outside, drawn";
         }
       }
     EXPECT_GT(checked, 500);
@@ -115,7 +121,8 @@ TriangleMesh FineSphere(double radius, int rings, int segments) {
     const double phi = M_PI * i / rings;
     for (int j = 0; j < segments; ++j) {
       const double th = 2 * M_PI * j / segments;
-      m.vertices.emplace_back(radius * std::sin(phi) * std::cos(th), radius * std::sin(phi) * std::sin(th), radius * std::cos(phi));
+      m.vertices.emplace_back(radius * std::sin(phi) * std::cos(th),
+                              radius * std::sin(phi) * std::sin(th), radius * std::cos(phi));
     }
   }
   for (int i = 0; i < rings; ++i)
@@ -137,7 +144,8 @@ TEST(Renderer, DepthIsMetricAlongTheOpticalAxis) {
   Scene scene;
   scene.K = K;
   scene.T_PC = MakeTransform(Vec3(0.1, 0.2, 0.3), ExpSO3(Vec3(0.2, 0.1, -0.3)));
-  scene.items.push_back({sphere, MakeTransform(scene.T_PC * centre_C, Mat3::Identity()), kObjectLabel, std::nullopt, 1.0, false});
+  scene.items.push_back({sphere, MakeTransform(scene.T_PC * centre_C, Mat3::Identity()),
+                         kObjectLabel, std::nullopt, 1.0, false});
   RenderOutput out;
   r.Render(scene, out);
   int checked = 0;
@@ -146,9 +154,11 @@ TEST(Renderer, DepthIsMetricAlongTheOpticalAxis) {
     for (int x = 0; x < K.width; x += 3) {
       // Analytic ray-sphere intersection through the pixel centre.
       const Vec3 ray = K.Unproject(Vec2(x, y), 1.0);
-      const double a = ray.squaredNorm(), b = -2 * ray.dot(centre_C), c = centre_C.squaredNorm() - radius * radius;
+      const double a = ray.squaredNorm(), b = -2 * ray.dot(centre_C),
+                   c = centre_C.squaredNorm() - radius * radius;
       const double disc = b * b - 4 * a * c;
-      if (disc < 4 * a * 0.3 * radius * radius) continue;  // skip grazing rays at the rim (tessellation)
+      if (disc < 4 * a * 0.3 * radius * radius)
+        continue;  // skip grazing rays at the rim (tessellation)
       const double t = (-b - std::sqrt(disc)) / (2 * a);
       const double z = t * ray.z();
       ASSERT_EQ(out.label_at(x, y), kObjectLabel);
@@ -161,10 +171,12 @@ TEST(Renderer, DepthIsMetricAlongTheOpticalAxis) {
   EXPECT_EQ(out.label_at(0, 0), 0);
 
   // A box face-on: its front face at exactly 0.5 m - 20 mm.
-  const int box = r.AddMesh(ConvexPiece::Box(Vec3(0.04, 0.03, 0.02), Transform::Identity()).ToMesh());
+  const int box =
+      r.AddMesh(ConvexPiece::Box(Vec3(0.04, 0.03, 0.02), Transform::Identity()).ToMesh());
   Scene face_on;
   face_on.K = K;
-  face_on.items.push_back({box, MakeTransform(Vec3(0.01, 0.0, 0.5), Mat3::Identity()), kObjectLabel, std::nullopt, 1.0, false});
+  face_on.items.push_back({box, MakeTransform(Vec3(0.01, 0.0, 0.5), Mat3::Identity()), kObjectLabel,
+                           std::nullopt, 1.0, false});
   r.Render(face_on, out);
   const Vec2 centre = K.Project(Vec3(0.01, 0.0, 0.48));
   EXPECT_NEAR(out.depth_at(static_cast<int>(centre.x()), static_cast<int>(centre.y())), 0.48, 1e-5);
@@ -185,7 +197,8 @@ TEST(Renderer, LabelImageIdentifiesTheLinks) {
   const Transform T_CP = scene.T_PC.inverse();
   const auto label_at = [&](const Vec3& X) {
     const Vec2 uv = scene.K.Project(T_CP * X);
-    return out.label_at(static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y())));
+    return out.label_at(static_cast<int>(std::lround(uv.x())),
+                        static_cast<int>(std::lround(uv.y())));
   };
   EXPECT_EQ(label_at(Vec3(0, 0.048, 0)), kHandLabelBase + hand.LinkIndex("palm"));
   for (const char* link : {"index_middle", "middle_distal", "ring_proximal", "thumb_middle"}) {
@@ -210,12 +223,14 @@ TEST(Renderer, VeryDarkHandsAreDrawnLegiblyInTheExplanatoryViews) {
       for (const auto& rgba : link) EXPECT_FALSE(rgba.has_value());
   }
   for (Link& link : hand.links)
-    for (TriangleMesh& m : link.visual) m.material.rgba = Eigen::Vector4d(0.004025, 0.004025, 0.004025, 1.0);
+    for (TriangleMesh& m : link.visual)
+      m.material.rgba = Eigen::Vector4d(0.004025, 0.004025, 0.004025, 1.0);
   Material black;
   black.rgba = Eigen::Vector4d(0.004, 0.002, 0.0, 0.5);
   const std::optional<Eigen::Vector4d> lifted = LegibleColour(black);
   ASSERT_TRUE(lifted.has_value());
-  EXPECT_NEAR(0.2126 * (*lifted)[0] + 0.7152 * (*lifted)[1] + 0.0722 * (*lifted)[2], kLegibleLuminance, 1e-12);
+  EXPECT_NEAR(0.2126 * (*lifted)[0] + 0.7152 * (*lifted)[1] + 0.0722 * (*lifted)[2],
+              kLegibleLuminance, 1e-12);
   EXPECT_NEAR((*lifted)[0] - (*lifted)[2], 0.004, 1e-12);  // the hue's differences kept
   EXPECT_EQ((*lifted)[3], 0.5);
   black.texture_file = "/some/texture.png";
@@ -258,7 +273,8 @@ TEST(Renderer, VeryDarkHandsAreDrawnLegiblyInTheExplanatoryViews) {
 // other; pixels no object covers are 0.
 TEST(Renderer, MasksOfOverlappingObjectsInOnePassAreTheirSilhouettes) {
   Renderer& r = SharedRenderer();
-  const ObjectModel ketchup = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  const ObjectModel ketchup =
+      LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
   const std::vector<int> meshes = UploadObject(r, ketchup);
   OverlayPainter painter(r, meshes);
   Scene scene;
@@ -266,11 +282,13 @@ TEST(Renderer, MasksOfOverlappingObjectsInOnePassAreTheirSilhouettes) {
   scene.T_PC = LookAt(Vec3(0.0, 0.0, 0.4), Vec3(0, 0, 0), Vec3::UnitY());
   std::vector<Transform> poses;
   for (int i = 0; i < 5; ++i)  // 8 mm and 6 deg apart: they overlap
-    poses.push_back(MakeTransform(Vec3(0.008 * i, 0.003 * i, -0.01 * i), ExpSO3(Vec3(0.1 * i, 0.0, 0.05 * i))));
+    poses.push_back(
+        MakeTransform(Vec3(0.008 * i, 0.003 * i, -0.01 * i), ExpSO3(Vec3(0.1 * i, 0.0, 0.05 * i))));
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const std::size_t first = scene.items.size();
     AddObject(scene, meshes, poses[i]);
-    for (std::size_t k = first; k < scene.items.size(); ++k) scene.items[k].label = static_cast<std::uint16_t>(1u << i);
+    for (std::size_t k = first; k < scene.items.size(); ++k)
+      scene.items[k].label = static_cast<std::uint16_t>(1u << i);
   }
   std::vector<std::uint16_t> bits;
   r.RenderMasks(scene, bits);
@@ -304,7 +322,8 @@ TEST(Renderer, TransparentBodyLetsTheBackgroundThrough) {
   scene.K = Camera();
   scene.T_PC = LookAt(Vec3(0, -0.5, 0.1), Vec3(0, 0, 0.1), Vec3::UnitZ());
   scene.background = Vec3(0.1, 0.1, 0.9);
-  scene.items.push_back({wall_id, MakeTransform(Vec3(0, 0.15, 0.1), ExpSO3(Vec3(M_PI / 2, 0, 0))), 7, std::nullopt, 1.0, false});
+  scene.items.push_back({wall_id, MakeTransform(Vec3(0, 0.15, 0.1), ExpSO3(Vec3(M_PI / 2, 0, 0))),
+                         7, std::nullopt, 1.0, false});
   AddObject(scene, bottle, Transform::Identity());
   RenderOutput out;
   r.Render(scene, out);
@@ -316,7 +335,8 @@ TEST(Renderer, TransparentBodyLetsTheBackgroundThrough) {
   EXPECT_GT(px[0], px[2] + 40);
   // Depth and label belong to the wall, not the transparent body.
   EXPECT_EQ(out.label_at(static_cast<int>(body.x()), static_cast<int>(body.y())), 7);
-  EXPECT_NEAR(out.depth_at(static_cast<int>(body.x()), static_cast<int>(body.y())), 0.5 + 0.15 - 0.005, 0.01);
+  EXPECT_NEAR(out.depth_at(static_cast<int>(body.x()), static_cast<int>(body.y())),
+              0.5 + 0.15 - 0.005, 0.01);
   // The opaque cap is drawn in its own blue and owns its pixels.
   const Vec2 cap = scene.K.Project(scene.T_PC.inverse() * Vec3(0.0, -0.016, 0.222));
   EXPECT_EQ(out.label_at(static_cast<int>(cap.x()), static_cast<int>(cap.y())), kObjectLabel);
@@ -329,13 +349,15 @@ struct GoldenScene {
   HandMeshes hand_meshes;
   std::vector<int> object_meshes;
   KinematicsData kin{hand};
-  Transform T_PO = MakeTransform(Vec3(-0.02, 0.05, 0.045), ExpSO3(Vec3(0, M_PI / 2, 0)) * ExpSO3(Vec3(0, 0, -0.4)));
+  Transform T_PO = MakeTransform(Vec3(-0.02, 0.05, 0.045),
+                                 ExpSO3(Vec3(0, M_PI / 2, 0)) * ExpSO3(Vec3(0, 0, -0.4)));
   Scene scene;
   explicit GoldenScene(Renderer& r) {
     hand_meshes = UploadHand(r, hand);
     object_meshes = UploadObject(r, ketchup);
     Eigen::VectorXd q = Eigen::VectorXd::Constant(hand.num_q(), 0.7);
-    for (const char* a : {"index_abduction", "middle_abduction", "ring_abduction"}) q[hand.joints[hand.JointIndex(a)].q_index] = 0.0;
+    for (const char* a : {"index_abduction", "middle_abduction", "ring_abduction"})
+      q[hand.joints[hand.JointIndex(a)].q_index] = 0.0;
     q[hand.joints[hand.JointIndex("thumb_abduction")].q_index] = 0.3;
     kin.Update(hand, q);
     scene.K = Camera();
@@ -350,20 +372,24 @@ struct GoldenScene {
 // actual image and the difference heat map are written next to the build's test output.
 void ExpectGolden(const Image8& actual, const std::string& name) {
   const std::string golden = test::SourceDir() + "/tests/golden/" + name;
-  if (const char* regen = std::getenv("INHAND_REGENERATE_GOLDEN"); regen && std::string(regen) == "1") {
+  if (const char* regen = std::getenv("INHAND_REGENERATE_GOLDEN");
+      regen && std::string(regen) == "1") {
     WriteImage(golden, actual);
     GTEST_SKIP() << "regenerated " << golden;
   }
-  ASSERT_TRUE(std::filesystem::exists(golden)) << golden << " missing: run with INHAND_REGENERATE_GOLDEN=1";
+  ASSERT_TRUE(std::filesystem::exists(golden))
+      << golden << " missing: run with INHAND_REGENERATE_GOLDEN=1";
   const Image8 expected = ReadImage(golden);
   const ImageDiff diff = CompareImages(actual, expected, 12);
   if (diff.bad_fraction > 0.003 || diff.max_channel_delta > 96) {
-    const std::string dir = std::filesystem::temp_directory_path().string() + "/inhand-golden-failures";
+    const std::string dir =
+        std::filesystem::temp_directory_path().string() + "/inhand-golden-failures";
     std::filesystem::create_directories(dir);
     WriteImage(dir + "/actual_" + name, actual);
     WriteImage(dir + "/diff_" + name, diff.heatmap);
-    FAIL() << name << ": " << diff.bad_fraction * 100 << " % of pixels differ by more than 12, max delta "
-           << diff.max_channel_delta << "; actual and diff written to " << dir;
+    FAIL() << name << ": " << diff.bad_fraction * 100
+           << " % of pixels differ by more than 12, max delta " << diff.max_channel_delta
+           << "; actual and diff written to " << dir;
   }
 }
 
@@ -388,12 +414,24 @@ TEST(Golden, Fig1StyleOverlay) {
   frame.T_PC = g.scene.T_PC;
   frame.K = g.scene.K;
   OverlayEstimate truth{"truth", kColourTruth, g.T_PO, Mat3::Zero(), true, {}, {}};
-  OverlayEstimate joints{"j", kColourJoints, MakeTransform(Vec3(0.012, -0.008, 0.01), Mat3::Identity()) * g.T_PO,
-                         Mat3::Identity() * 1e-4, false, {}, {}};
-  joints.contacts.push_back({OverlayContact::Kind::kKinematic, Vec3(0.0, 0.08, 0.07), Vec3(0.0, 0.08, 0.07), Vec3(0, -1, 0), Vec3::Zero()});
-  joints.contacts.push_back({OverlayContact::Kind::kTorque, Vec3(0.02, 0.06, 0.02), Vec3(0.02, 0.06, 0.02), Vec3(0, 0, 1), Vec3(0, 0, 5)});
-  OverlayEstimate features{"jtf", kColourFeatures, MakeTransform(Vec3(0.002, 0.001, 0.0), Mat3::Identity()) * g.T_PO,
-                           Mat3::Identity() * 4e-6, false, {}, {}};
+  OverlayEstimate joints{"j",
+                         kColourJoints,
+                         MakeTransform(Vec3(0.012, -0.008, 0.01), Mat3::Identity()) * g.T_PO,
+                         Mat3::Identity() * 1e-4,
+                         false,
+                         {},
+                         {}};
+  joints.contacts.push_back({OverlayContact::Kind::kKinematic, Vec3(0.0, 0.08, 0.07),
+                             Vec3(0.0, 0.08, 0.07), Vec3(0, -1, 0), Vec3::Zero()});
+  joints.contacts.push_back({OverlayContact::Kind::kTorque, Vec3(0.02, 0.06, 0.02),
+                             Vec3(0.02, 0.06, 0.02), Vec3(0, 0, 1), Vec3(0, 0, 5)});
+  OverlayEstimate features{"jtf",
+                           kColourFeatures,
+                           MakeTransform(Vec3(0.002, 0.001, 0.0), Mat3::Identity()) * g.T_PO,
+                           Mat3::Identity() * 4e-6,
+                           false,
+                           {},
+                           {}};
   features.features.push_back({Vec2(120, 140), Vec2(126, 137), true});
   features.features.push_back({Vec2(200, 90), Vec2(180, 100), false});
   frame.estimates = {truth, joints, features};
@@ -416,10 +454,13 @@ TEST(Golden, Fig1StyleOverlay) {
 // says) breaks into lines that stay inside it: between clauses where it can, between words inside
 // a clause too wide for a line of its own, never inside a word. Nothing is lost or reordered.
 TEST(Overlay, LongHudLinesWrapInsideThePicture) {
-  const std::string line = "jtf: 63.5 mm / 117.8 deg, sigma 10.1 mm / 9.3 deg, 1 constraint, object not matched in 14 frames";
+  const std::string line =
+      "jtf: 63.5 mm / 117.8 deg, sigma 10.1 mm / 9.3 deg, 1 constraint, object not matched in 14 "
+      "frames";
   const auto joined = [](const std::vector<std::string>& pieces) {
     std::string all;
-    for (const std::string& p : pieces) all += (all.empty() ? "" : " ") + p.substr(p.find_first_not_of(' '));
+    for (const std::string& p : pieces)
+      all += (all.empty() ? "" : " ") + p.substr(p.find_first_not_of(' '));
     return all;
   };
   EXPECT_EQ(WrapHudLine(line, 10000), std::vector<std::string>{line});
@@ -427,12 +468,15 @@ TEST(Overlay, LongHudLinesWrapInsideThePicture) {
   const std::vector<std::string> clauses = WrapHudLine(line, 330);
   ASSERT_GE(clauses.size(), 2u);
   EXPECT_EQ(joined(clauses), line);
-  for (std::size_t i = 0; i + 1 < clauses.size(); ++i) EXPECT_EQ(clauses[i].back(), ',') << clauses[i];
-  for (std::size_t i = 1; i < clauses.size(); ++i) EXPECT_EQ(clauses[i].rfind("  ", 0), 0u) << clauses[i];
+  for (std::size_t i = 0; i + 1 < clauses.size(); ++i)
+    EXPECT_EQ(clauses[i].back(), ',') << clauses[i];
+  for (std::size_t i = 1; i < clauses.size(); ++i)
+    EXPECT_EQ(clauses[i].rfind("  ", 0), 0u) << clauses[i];
   const std::vector<std::string> words = WrapHudLine(line, 120);  // narrower than most clauses
   EXPECT_GT(words.size(), clauses.size());
   EXPECT_EQ(joined(words), line);
-  EXPECT_EQ(WrapHudLine("unbreakable_word_wider_than_the_line", 20), std::vector<std::string>{"unbreakable_word_wider_than_the_line"});
+  EXPECT_EQ(WrapHudLine("unbreakable_word_wider_than_the_line", 20),
+            std::vector<std::string>{"unbreakable_word_wider_than_the_line"});
   // Odd spacing and commas: no character but spaces is lost, added or moved.
   const auto squeezed = [](const std::string& text) {
     std::string out;
@@ -440,7 +484,8 @@ TEST(Overlay, LongHudLinesWrapInsideThePicture) {
       if (c != ' ') out += c;
     return out;
   };
-  for (const std::string odd : {"  ,  , x   y ,", " ", ", , ,", "a,b, c ,d", "  wide_word  wide_word_two , x"}) {
+  for (const std::string odd :
+       {"  ,  , x   y ,", " ", ", , ,", "a,b, c ,d", "  wide_word  wide_word_two , x"}) {
     std::string all;
     for (const std::string& piece : WrapHudLine(odd, 5)) all += piece;
     EXPECT_EQ(squeezed(all), squeezed(odd)) << "'" << odd << "'";
@@ -474,7 +519,8 @@ TEST(Video, H264FramesRoundTrip) {
     for (int i = 0; i < 12; ++i) {
       Image8 frame(320, 240, 3);
       for (int y = 0; y < 240; ++y)
-        for (int x = 0; x < 320; ++x) frame.pixel(x, y)[0] = static_cast<std::uint8_t>((x + 10 * i) % 256);
+        for (int x = 0; x < 320; ++x)
+          frame.pixel(x, y)[0] = static_cast<std::uint8_t>((x + 10 * i) % 256);
       w.Write(frame);
     }
     EXPECT_EQ(w.frames(), 12);

@@ -25,22 +25,33 @@ namespace fs = std::filesystem;
 namespace inhand {
 namespace {
 
-const std::vector<std::string> kFormats = {"synthetic.bag", "synthetic.mcap", "synthetic_zstd.mcap", "synthetic_lz4.mcap", "synthetic.db3"};
-std::string Fixture(const std::string& name) { return test::SourceDir() + "/tests/ros/fixtures/" + name; }
+const std::vector<std::string> kFormats = {"synthetic.bag", "synthetic.mcap", "synthetic_zstd.mcap",
+                                           "synthetic_lz4.mcap", "synthetic.db3"};
+std::string Fixture(const std::string& name) {
+  return test::SourceDir() + "/tests/ros/fixtures/" + name;
+}
 const std::string kHand = test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf");
 const std::string kObject = test::ProjectAsset("objects/ketchup_bottle/object.json");
 
-std::string Import(const std::string& recording, const std::string& out, const std::string& extra = "") {
-  return "import " + recording + " --out " + out + " --hand " + kHand + " --object " + kObject + " " + extra;
+std::string Import(const std::string& recording, const std::string& out,
+                   const std::string& extra = "") {
+  return "import " + recording + " --out " + out + " --hand " + kHand + " --object " + kObject +
+         " " + extra;
 }
 // The synthetic recording's poses (synthetic.mjs).
-Transform AboutZ(const Vec3& p, double a) { return MakeTransform(p, Quat(Eigen::AngleAxisd(a, Vec3::UnitZ()))); }
+Transform AboutZ(const Vec3& p, double a) {
+  return MakeTransform(p, Quat(Eigen::AngleAxisd(a, Vec3::UnitZ())));
+}
 Transform WorldPalm() { return AboutZ(Vec3(0.1, 0.2, 0.3), M_PI / 6); }
 Transform CameraLinkOptical() { return MakeTransform(Vec3::Zero(), Quat(0.5, -0.5, 0.5, -0.5)); }
 Transform WorldCameraLink(double s) { return AboutZ(Vec3(0.5 + 0.1 * s, -0.2, 0.4), 0.2 * s); }
-Transform WorldObject(double s) { return MakeTransform(Vec3(0.15, 0.2 + 0.05 * s, 0.35), Quat(Eigen::AngleAxisd(0.1 * s, Vec3::UnitX()))); }
+Transform WorldObject(double s) {
+  return MakeTransform(Vec3(0.15, 0.2 + 0.05 * s, 0.35),
+                       Quat(Eigen::AngleAxisd(0.1 * s, Vec3::UnitX())));
+}
 double PoseError(const Transform& a, const Transform& b) {
-  return std::max((a.translation() - b.translation()).norm(), LogSO3(a.linear().transpose() * b.linear()).norm());
+  return std::max((a.translation() - b.translation()).norm(),
+                  LogSO3(a.linear().transpose() * b.linear()).norm());
 }
 
 // Every format's file imports to the recording the formulas describe, and to byte-identical
@@ -55,8 +66,9 @@ TEST(Import, EveryFormatGivesTheSyntheticRecording) {
   for (const std::string& format : kFormats) {
     SCOPED_TRACE(format);
     const std::string out = dir / format;
-    const test::CommandResult r =
-        test::RunInhand(Import(Fixture(format), out, "--image /camera/image_raw --object-pose /mocap/object --effort-is external"));
+    const test::CommandResult r = test::RunInhand(
+        Import(Fixture(format), out,
+               "--image /camera/image_raw --object-pose /mocap/object --effort-is external"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("199 samples"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("1 duplicate stamps"), std::string::npos) << r.output;
@@ -89,7 +101,8 @@ TEST(Import, EveryFormatGivesTheSyntheticRecording) {
       const double t = (f * 50000000 + 2500000) / 1e9;
       EXPECT_EQ(s.camera_frames()[static_cast<std::size_t>(f)].t, t);
       const Transform expected = WorldPalm().inverse() * WorldCameraLink(t) * CameraLinkOptical();
-      worst = std::max(worst, PoseError(expected, s.camera_frames()[static_cast<std::size_t>(f)].T_PC));
+      worst =
+          std::max(worst, PoseError(expected, s.camera_frames()[static_cast<std::size_t>(f)].T_PC));
       const Image8 img = s.LoadImage(f);
       for (int y = 0; y < 48; y += 7)
         for (int x = 0; x < 64; x += 5) {
@@ -105,13 +118,16 @@ TEST(Import, EveryFormatGivesTheSyntheticRecording) {
     for (int g = 0; g < 100; ++g) {
       const double t = (g * 10000000 + 1000000) / 1e9;
       EXPECT_EQ(s.groundtruth()[static_cast<std::size_t>(g)].t, t);
-      worst = std::max(worst, PoseError(WorldPalm().inverse() * WorldObject(t), s.groundtruth()[static_cast<std::size_t>(g)].T_PO));
+      worst = std::max(worst, PoseError(WorldPalm().inverse() * WorldObject(t),
+                                        s.groundtruth()[static_cast<std::size_t>(g)].T_PO));
     }
     EXPECT_LT(worst, 1e-9);
     EXPECT_LT(PoseError(s.info().initial_T_PO, WorldPalm().inverse() * WorldObject(0.001)), 1e-9);
     // The same bytes whichever writer made the recording.
     if (first_joints.empty()) {
-      first_joints = test::ReadFile(out + "/joints.csv"), first_camera = test::ReadFile(out + "/camera.csv"), first_truth = test::ReadFile(out + "/groundtruth.csv");
+      first_joints = test::ReadFile(out + "/joints.csv"),
+      first_camera = test::ReadFile(out + "/camera.csv"),
+      first_truth = test::ReadFile(out + "/groundtruth.csv");
     } else {
       EXPECT_EQ(test::ReadFile(out + "/joints.csv"), first_joints);
       EXPECT_EQ(test::ReadFile(out + "/camera.csv"), first_camera);
@@ -125,22 +141,27 @@ TEST(Import, EveryFormatGivesTheSyntheticRecording) {
 TEST(Import, GroundTruthFromTransformStampedAndOdometry) {
   test::TempDir dir;
   const auto camera_link_object = [](double s) {
-    return MakeTransform(Vec3(0.05, 0.1 + 0.02 * s, -0.03), Quat(Eigen::AngleAxisd(0.3 * s, Vec3::UnitX())));
+    return MakeTransform(Vec3(0.05, 0.1 + 0.02 * s, -0.03),
+                         Quat(Eigen::AngleAxisd(0.3 * s, Vec3::UnitX())));
   };
   for (const std::string& format : kFormats) {
     for (const std::string topic : {"/mocap/object_tf", "/odom"}) {
       SCOPED_TRACE(format + " " + topic);
       const std::string out = dir / (format + topic.substr(1));
-      const test::CommandResult r = test::RunInhand(Import(Fixture(format), out, "--no-images --object-pose " + topic));
+      const test::CommandResult r =
+          test::RunInhand(Import(Fixture(format), out, "--no-images --object-pose " + topic));
       ASSERT_EQ(r.exit_code, 0) << r.output;
       const Session s = Session::Load(out);
       ASSERT_EQ(s.groundtruth().size(), 50u);
       double worst = 0;
       for (int g = 0; g < 50; ++g) {
         const double t = (2 * g * 10000000 + 1000000) / 1e9;
-        const Transform expected = topic == "/odom" ? WorldPalm().inverse() * WorldCameraLink(t) * camera_link_object(t) : WorldPalm().inverse() * WorldObject(t);
+        const Transform expected =
+            topic == "/odom" ? WorldPalm().inverse() * WorldCameraLink(t) * camera_link_object(t)
+                             : WorldPalm().inverse() * WorldObject(t);
         EXPECT_EQ(s.groundtruth()[static_cast<std::size_t>(g)].t, t);
-        worst = std::max(worst, PoseError(expected, s.groundtruth()[static_cast<std::size_t>(g)].T_PO));
+        worst =
+            std::max(worst, PoseError(expected, s.groundtruth()[static_cast<std::size_t>(g)].T_PO));
       }
       EXPECT_LT(worst, 1e-9);
     }
@@ -149,12 +170,16 @@ TEST(Import, GroundTruthFromTransformStampedAndOdometry) {
 
 // --list names every topic with its type, count and rate, and the TF tree.
 TEST(Import, ListShowsTopicsAndFrames) {
-  for (const std::string& format : {std::string("synthetic.bag"), std::string("synthetic_lz4.mcap"), std::string("synthetic.db3")}) {
+  for (const std::string& format : {std::string("synthetic.bag"), std::string("synthetic_lz4.mcap"),
+                                    std::string("synthetic.db3")}) {
     const test::CommandResult r = test::RunInhand("import " + Fixture(format) + " --list");
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    for (const char* want : {"/joint_states", "sensor_msgs/JointState", "200", "200.0", "/camera/image_raw", "sensor_msgs/Image",
-                             "camera_optical <- camera_link  (static)", "camera_link <- world  (101 transforms)", "palm <- world"})
-      EXPECT_NE(r.output.find(want), std::string::npos) << format << ": " << want << "\n" << r.output;
+    for (const char* want :
+         {"/joint_states", "sensor_msgs/JointState", "200", "200.0", "/camera/image_raw",
+          "sensor_msgs/Image", "camera_optical <- camera_link  (static)",
+          "camera_link <- world  (101 transforms)", "palm <- world"})
+      EXPECT_NE(r.output.find(want), std::string::npos) << format << ": " << want << "\n"
+                                                        << r.output;
   }
 }
 
@@ -162,8 +187,10 @@ TEST(Import, ListShowsTopicsAndFrames) {
 // keeps the recording's own time.
 TEST(Import, WindowAndTimeOrigin) {
   test::TempDir dir;
-  const test::CommandResult r = test::RunInhand(
-      Import(Fixture("synthetic.mcap"), dir / "s", "--no-images --initial-pose=-0.03,0.01,0.1,1,0,0,0 --start 0.1 --end 0.2 --time-origin 1700000000"));
+  const test::CommandResult r =
+      test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "s",
+                             "--no-images --initial-pose=-0.03,0.01,0.1,1,0,0,0 --start 0.1 --end "
+                             "0.2 --time-origin 1700000000"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Session s = Session::Load(dir / "s");
   EXPECT_FALSE(s.has_torques());
@@ -176,10 +203,16 @@ TEST(Import, WindowAndTimeOrigin) {
 // An elastic hand's stiffness goes into session.json, by joint or for every joint.
 TEST(Import, JointStiffnessReachesTheSession) {
   test::TempDir dir;
-  const std::string base = "--no-images --object-pose /mocap/object --effort-is external --joint-stiffness ";
-  ASSERT_EQ(test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "s", base + "thumb_flex1=35,*=20")).exit_code, 0);
-  EXPECT_EQ(Session::Load(dir / "s").info().joint_stiffness, (std::map<std::string, double>{{"*", 20.0}, {"thumb_flex1", 35.0}}));
-  ASSERT_EQ(test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "t", base + "12.5")).exit_code, 0);
+  const std::string base =
+      "--no-images --object-pose /mocap/object --effort-is external --joint-stiffness ";
+  ASSERT_EQ(
+      test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "s", base + "thumb_flex1=35,*=20"))
+          .exit_code,
+      0);
+  EXPECT_EQ(Session::Load(dir / "s").info().joint_stiffness,
+            (std::map<std::string, double>{{"*", 20.0}, {"thumb_flex1", 35.0}}));
+  ASSERT_EQ(test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "t", base + "12.5")).exit_code,
+            0);
   const SessionModels models = LoadSessionModels(Session::Load(dir / "t"), false);
   EXPECT_EQ(models.hand.joint_stiffness, std::vector<double>(16, 12.5));
 }
@@ -189,55 +222,81 @@ TEST(Import, BadInputIsOneClearLineAndNoOutput) {
   test::TempDir dir;
   const std::string bag = Fixture("synthetic.bag"), mcap = Fixture("synthetic_zstd.mcap");
   dir.Write("notabag.bag", "this is not a recording\n");
-  for (const auto& [name, size] : {std::pair<std::string, double>{"synthetic.bag", 0.6}, {"synthetic_zstd.mcap", 0.6}, {"synthetic.mcap", 0.3}}) {
+  for (const auto& [name, size] : {std::pair<std::string, double>{"synthetic.bag", 0.6},
+                                   {"synthetic_zstd.mcap", 0.6},
+                                   {"synthetic.mcap", 0.3}}) {
     const std::string all = test::ReadFile(Fixture(name));
-    dir.Write("cut_" + name, all.substr(0, static_cast<std::size_t>(size * static_cast<double>(all.size()))));
+    dir.Write("cut_" + name,
+              all.substr(0, static_cast<std::size_t>(size * static_cast<double>(all.size()))));
   }
   dir.Write("finger.urdf",
-            "<robot name=\"finger\"><link name=\"palm\"/><link name=\"tip\"/><joint name=\"finger_joint\" type=\"revolute\">"
-            "<parent link=\"palm\"/><child link=\"tip\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>");
+            "<robot name=\"finger\"><link name=\"palm\"/><link name=\"tip\"/><joint "
+            "name=\"finger_joint\" type=\"revolute\">"
+            "<parent link=\"palm\"/><child link=\"tip\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" "
+            "upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>");
   const std::string gt = "--object-pose /mocap/object";
   struct Case {
     std::string args, expected;
   };
   const std::vector<Case> cases = {
       {Import(dir / "notabag.bag", dir / "out", gt), "not a ROS recording"},
-      {Import(dir / "cut_synthetic.bag", dir / "out", "--image /camera/image_raw " + gt), "cut_synthetic.bag"},
-      {Import(dir / "cut_synthetic_zstd.mcap", dir / "out", "--image /camera/image_raw " + gt), "truncated or corrupt MCAP"},
-      {Import(dir / "cut_synthetic.mcap", dir / "out", "--image /camera/image_raw " + gt), "truncated or corrupt MCAP"},
-      {Import(bag, dir / "out", "--joints /nope " + gt), "--joints /nope: no such topic; the recording has /camera/camera_info"},
-      {Import(mcap, dir / "out", "--joints /camera/camera_info " + gt), "is of type sensor_msgs/CameraInfo, expected sensor_msgs/JointState"},
-      {Import(bag, dir / "out", "--image /camera3/image_raw " + gt), "image encoding 'yuv422' is not supported"},
-      {Import(mcap, dir / "out", "--image /camera2/image_raw " + gt), "image is 64x48, camera_info says 640x480"},
-      {Import(bag, dir / "out", "--image /camera/image_raw --camera-frame table_marker " + gt), "no TF path from 'palm' to 'table_marker'"},
+      {Import(dir / "cut_synthetic.bag", dir / "out", "--image /camera/image_raw " + gt),
+       "cut_synthetic.bag"},
+      {Import(dir / "cut_synthetic_zstd.mcap", dir / "out", "--image /camera/image_raw " + gt),
+       "truncated or corrupt MCAP"},
+      {Import(dir / "cut_synthetic.mcap", dir / "out", "--image /camera/image_raw " + gt),
+       "truncated or corrupt MCAP"},
+      {Import(bag, dir / "out", "--joints /nope " + gt),
+       "--joints /nope: no such topic; the recording has /camera/camera_info"},
+      {Import(mcap, dir / "out", "--joints /camera/camera_info " + gt),
+       "is of type sensor_msgs/CameraInfo, expected sensor_msgs/JointState"},
+      {Import(bag, dir / "out", "--image /camera3/image_raw " + gt),
+       "image encoding 'yuv422' is not supported"},
+      {Import(mcap, dir / "out", "--image /camera2/image_raw " + gt),
+       "image is 64x48, camera_info says 640x480"},
+      {Import(bag, dir / "out", "--image /camera/image_raw --camera-frame table_marker " + gt),
+       "no TF path from 'palm' to 'table_marker'"},
       {Import(mcap, dir / "out", "--image /camera/image_raw"), "no initial estimate"},
-      {Import(bag, dir / "out", gt), "several sensor_msgs/Image or sensor_msgs/CompressedImage topics"},
-      {"import " + bag + " --out " + (dir / "out") + " --hand " + (dir / "finger.urdf") + " --object " + kObject + " --no-images " + gt,
-       "the hand's joint finger_joint is not in the message, which names arm_joint_1, arm_joint_2, thumb_flex3"},
+      {Import(bag, dir / "out", gt),
+       "several sensor_msgs/Image or sensor_msgs/CompressedImage topics"},
+      {"import " + bag + " --out " + (dir / "out") + " --hand " + (dir / "finger.urdf") +
+           " --object " + kObject + " --no-images " + gt,
+       "the hand's joint finger_joint is not in the message, which names arm_joint_1, arm_joint_2, "
+       "thumb_flex3"},
       {Import(bag, dir / "out", "--no-images --initial-pose 1,2,3"), "--initial-pose: 3 numbers"},
       {Import(bag, dir / "out", "--no-images --initial-pose=0,0,0,2,0,0,0"), "has norm 2"},
-      {Import(bag, dir / "out", "--no-images --effort-is measured " + gt), "--effort-is: 'measured'"},
-      {Import(bag, dir / "out", "--no-images --joint-stiffness 20 " + gt), "--joint-stiffness: the correction q - tau / k needs the external torques"},
-      {Import(bag, dir / "out", "--no-images --effort-is external --joint-stiffness index_flex1=-3 " + gt), "--joint-stiffness: 'index_flex1=-3'"},
-      {Import(bag, dir / "out", "--no-images --effort-is external --joint-stiffness stiff " + gt), "--joint-stiffness: 'stiff' is not a number"},
-      {Import(bag, dir / "out", "--no-images --effort-is external --joint-stiffness pinky_flex2=20 " + gt), "has no independent joint 'pinky_flex2'"},
+      {Import(bag, dir / "out", "--no-images --effort-is measured " + gt),
+       "--effort-is: 'measured'"},
+      {Import(bag, dir / "out", "--no-images --joint-stiffness 20 " + gt),
+       "--joint-stiffness: the correction q - tau / k needs the external torques"},
+      {Import(bag, dir / "out",
+              "--no-images --effort-is external --joint-stiffness index_flex1=-3 " + gt),
+       "--joint-stiffness: 'index_flex1=-3'"},
+      {Import(bag, dir / "out", "--no-images --effort-is external --joint-stiffness stiff " + gt),
+       "--joint-stiffness: 'stiff' is not a number"},
+      {Import(bag, dir / "out",
+              "--no-images --effort-is external --joint-stiffness pinky_flex2=20 " + gt),
+       "has no independent joint 'pinky_flex2'"},
   };
   for (const Case& c : cases) {
     const test::CommandResult r = test::RunInhand(c.args);
     EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
-    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\nexpected: " << c.expected << "\ngot: " << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos)
+        << c.args << "\nexpected: " << c.expected << "\ngot: " << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
     EXPECT_FALSE(fs::exists(dir / "out")) << c.args;
   }
   // Nothing left beside the target either (no staging folders).
-  for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename().string().find(".out"), std::string::npos) << e.path();
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find(".out"), std::string::npos) << e.path();
 }
 
 // The TF tree on its own: composition along both branches, interpolation, and the error that
 // names the two parts of a split tree.
 TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
   ros::TfTree tree;
-  const auto add = [&](const std::string& parent, const std::string& child, std::int64_t t, const Transform& T, bool is_static) {
+  const auto add = [&](const std::string& parent, const std::string& child, std::int64_t t,
+                       const Transform& T, bool is_static) {
     ros::StampedTransform s;
     s.header.frame_id = parent;
     s.header.stamp_ns = t;
@@ -245,7 +304,8 @@ TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
     s.T = {T.translation(), Quat(T.linear())};
     tree.Add(s, is_static);
   };
-  const Transform A = AboutZ(Vec3(1, 2, 3), 0.3), B = MakeTransform(Vec3(-1, 0.5, 0), ExpSO3(Vec3(0.1, -0.2, 0.3)));
+  const Transform A = AboutZ(Vec3(1, 2, 3), 0.3),
+                  B = MakeTransform(Vec3(-1, 0.5, 0), ExpSO3(Vec3(0.1, -0.2, 0.3)));
   add("world", "a", 0, A, true);
   add("world", "b", 0, B, false);
   add("world", "b", 1000, B * AboutZ(Vec3(0.1, 0, 0), 0.5), false);
@@ -259,22 +319,27 @@ TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
     tree.Lookup("a", "rock", 0);
     ADD_FAILURE() << "no error for a split tree";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("{a, b, world} and {island, rock}"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("{a, b, world} and {island, rock}"), std::string::npos)
+        << e.what();
   }
-  EXPECT_FALSE(tree.Lookup("a", "b", 5000000000LL, true).has_value());  // 5 s beyond the last sample
+  EXPECT_FALSE(
+      tree.Lookup("a", "b", 5000000000LL, true).has_value());  // 5 s beyond the last sample
 }
 
 // The real Allegro recording (../shared/fixtures): 16 joints named joint_0.0 ... joint_15.0, no
 // images, no torques. Every sample imports; replay runs j and renders the 3-D view of the real
 // finger motion into a video.
 TEST(Import, RealAllegroBagReplaysWithA3dVideo) {
-  const fs::path bag = fs::path(test::SourceDir()).parent_path() / "shared/fixtures/ros1/allegro_jointstates.bag";
+  const fs::path bag =
+      fs::path(test::SourceDir()).parent_path() / "shared/fixtures/ros1/allegro_jointstates.bag";
   if (!fs::exists(bag)) GTEST_SKIP() << bag << " is absent";
   INHAND_REQUIRE_SHARED_ASSETS();
   test::TempDir dir;
   const std::string hands = test::SharedAssets() + "/hands/allegro_hand/allegro_hand_right.urdf";
-  const test::CommandResult r = test::RunInhand("import " + bag.string() + " --out " + (dir / "s") + " --hand " + hands + " --object " +
-                                                test::SharedAssets() + "/objects/ycb/large_marker.urdf --initial-pose=0.05,0,0.09,0.7071068,0.7071068,0,0");
+  const test::CommandResult r = test::RunInhand(
+      "import " + bag.string() + " --out " + (dir / "s") + " --hand " + hands + " --object " +
+      test::SharedAssets() +
+      "/objects/ycb/large_marker.urdf --initial-pose=0.05,0,0.09,0.7071068,0.7071068,0,0");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Session s = Session::Load(dir / "s");
   EXPECT_EQ(s.num_samples(), 2697);
@@ -286,22 +351,32 @@ TEST(Import, RealAllegroBagReplaysWithA3dVideo) {
   // The fingers really move in this recording.
   EXPECT_GT((s.q(s.num_samples() - 1) - s.q(0)).cwiseAbs().maxCoeff(), 0.2);
 
-  const test::CommandResult replay = test::RunInhand("replay " + (dir / "s") + " --out " + (dir / "r") + " --frames --video-fps 5");
+  const test::CommandResult replay = test::RunInhand("replay " + (dir / "s") + " --out " +
+                                                     (dir / "r") + " --frames --video-fps 5");
   ASSERT_EQ(replay.exit_code, 0) << replay.output;
   EXPECT_NE(replay.output.find("  j: "), std::string::npos) << replay.output;
   EXPECT_TRUE(fs::exists(dir / "r/replay.mp4"));
   int frames = 0;
-  for (const auto& e : fs::directory_iterator(dir / "r/frames")) frames += e.path().extension() == ".png";
+  for (const auto& e : fs::directory_iterator(dir / "r/frames"))
+    frames += e.path().extension() == ".png";
   EXPECT_EQ(frames, 41);  // 8.09 s at 5 Hz, from t = 0
   const Image8 first = ReadImage(dir / "r/frames/frame_000000.png");
   EXPECT_EQ(first.width, 960);
-  EXPECT_EQ(test::RunInhand("compare " + (dir / "r/frames/frame_000000.png") + " " + (dir / "r/frames/frame_000040.png")).exit_code, 1);
+  EXPECT_EQ(test::RunInhand("compare " + (dir / "r/frames/frame_000000.png") + " " +
+                            (dir / "r/frames/frame_000040.png"))
+                .exit_code,
+            1);
   // Sequential and parallel replays agree (the blocks end at the pictures' times).
-  const test::CommandResult one = test::RunInhand("replay " + (dir / "s") + " --out " + (dir / "r1") + " --frames --video-fps 5 --jobs 1");
+  const test::CommandResult one = test::RunInhand(
+      "replay " + (dir / "s") + " --out " + (dir / "r1") + " --frames --video-fps 5 --jobs 1");
   ASSERT_EQ(one.exit_code, 0) << one.output;
-  const test::CommandResult two = test::RunInhand("replay " + (dir / "s") + " --out " + (dir / "r2") + " --frames --video-fps 5 --jobs 2");
+  const test::CommandResult two = test::RunInhand(
+      "replay " + (dir / "s") + " --out " + (dir / "r2") + " --frames --video-fps 5 --jobs 2");
   ASSERT_EQ(two.exit_code, 0) << two.output;
-  EXPECT_EQ(test::RunInhand("compare " + (dir / "r1/frames") + " " + (dir / "r2/frames") + " --max-channel-delta 0 --max-bad-fraction 0").exit_code, 0);
+  EXPECT_EQ(test::RunInhand("compare " + (dir / "r1/frames") + " " + (dir / "r2/frames") +
+                            " --max-channel-delta 0 --max-bad-fraction 0")
+                .exit_code,
+            0);
   const auto read = [](const fs::path& p) {
     std::ifstream in(p, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), {});
@@ -309,12 +384,15 @@ TEST(Import, RealAllegroBagReplaysWithA3dVideo) {
   EXPECT_EQ(read(dir / "r1/estimates.csv"), read(dir / "r2/estimates.csv"));
 #ifdef INHAND_WITH_GUI
   // The GUI shows the same 3-D view instead of "(no image yet)".
-  const test::CommandResult gui = test::RunInhand("gui " + (dir / "s") + " --time 4 --frames 2 --screenshot " + (dir / "gui.png"), "env -u DISPLAY");
+  const test::CommandResult gui = test::RunInhand(
+      "gui " + (dir / "s") + " --time 4 --frames 2 --screenshot " + (dir / "gui.png"),
+      "env -u DISPLAY");
   ASSERT_EQ(gui.exit_code, 0) << gui.output;
   const Image8 shot = ReadImage(dir / "gui.png");
   long bright = 0;  // the 3-D view's light background fills most of the view panel
   for (int y = 100; y < 600; y += 4)
-    for (int x = 400; x < 1200; x += 4) bright += shot.pixel(x, y)[0] > 200 && shot.pixel(x, y)[2] > 200;
+    for (int x = 400; x < 1200; x += 4)
+      bright += shot.pixel(x, y)[0] > 200 && shot.pixel(x, y)[2] > 200;
   EXPECT_GT(bright, 10000) << "no 3-D view in the GUI";
 #endif
 }

@@ -43,51 +43,74 @@ void WriteRepresentable(const Session& sim, const std::string& out) {
   SessionWriter w(out, info, sim.joint_names());
   for (int k = 0; k < sim.num_samples(); ++k) w.AddJointSample(ns(sim.t(k)), sim.q(k), sim.tau(k));
   for (std::size_t i = 0; i < sim.camera_frames().size(); ++i)
-    w.AddCameraFrame(ns(sim.camera_frames()[i].t), sim.LoadImage(static_cast<int>(i)), sim.camera_frames()[i].T_PC);
+    w.AddCameraFrame(ns(sim.camera_frames()[i].t), sim.LoadImage(static_cast<int>(i)),
+                     sim.camera_frames()[i].T_PC);
   for (const GroundTruthSample& g : sim.groundtruth()) w.AddGroundTruth(ns(g.t), g.T_PO);
   w.Commit();
 }
 
 TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
-  if (!HaveNodeTools()) GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
+  if (!HaveNodeTools())
+    GTEST_SKIP()
+        << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 3 --out " + (dir / "sim")).exit_code, 0);
+  ASSERT_EQ(
+      test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 3 --out " + (dir / "sim"))
+          .exit_code,
+      0);
   WriteRepresentable(Session::Load(dir / "sim"), dir / "orig");
   const Session orig = Session::Load(dir / "orig");
   const Transform& T0 = orig.info().initial_T_PO;
   const Quat q0(T0.linear());
   std::string pose, sigma;
-  for (double v : {T0.translation().x(), T0.translation().y(), T0.translation().z(), q0.w(), q0.x(), q0.y(), q0.z()})
+  for (double v : {T0.translation().x(), T0.translation().y(), T0.translation().z(), q0.w(), q0.x(),
+                   q0.y(), q0.z()})
     pose += (pose.empty() ? "" : ",") + FormatDouble(v);
-  for (double v : {orig.info().sigma_position, orig.info().sigma_orientation, orig.info().sigma_joint_bias})
+  for (double v :
+       {orig.info().sigma_position, orig.info().sigma_orientation, orig.info().sigma_joint_bias})
     sigma += (sigma.empty() ? "" : ",") + FormatDouble(v);
 
-  ASSERT_EQ(Shell("/usr/bin/python3 " + tools + "/session_to_ros1.py " + (dir / "orig") + " " + (dir / "rec.bag")), 0);
-  ASSERT_EQ(Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " + (dir / "rec.mcap") + " zstd"), 0);
-  ASSERT_EQ(Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " + (dir / "rec.db3")), 0);
-  ASSERT_EQ(test::RunInhand("replay " + (dir / "orig") + " --no-video --out " + (dir / "replay_orig")).exit_code, 0);
+  ASSERT_EQ(Shell("/usr/bin/python3 " + tools + "/session_to_ros1.py " + (dir / "orig") + " " +
+                  (dir / "rec.bag")),
+            0);
+  ASSERT_EQ(Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " +
+                  (dir / "rec.mcap") + " zstd"),
+            0);
+  ASSERT_EQ(
+      Shell("node " + tools + "/session_to_ros2.mjs " + (dir / "orig") + " " + (dir / "rec.db3")),
+      0);
+  ASSERT_EQ(
+      test::RunInhand("replay " + (dir / "orig") + " --no-video --out " + (dir / "replay_orig"))
+          .exit_code,
+      0);
   const std::string estimates = test::ReadFile(dir / "replay_orig/estimates.csv");
   ASSERT_GT(estimates.size(), 1000u);
 
   for (const std::string rec : {"rec.bag", "rec.mcap", "rec.db3"}) {
     SCOPED_TRACE(rec);
     const std::string out = dir / ("imported_" + rec);
-    const test::CommandResult r = test::RunInhand("import " + (dir / rec) + " --out " + out + " --hand " + orig.Resolve(orig.info().hand_urdf) +
-                                                  " --object " + orig.Resolve(orig.info().object) +
-                                                  " --time-origin 0 --effort-is external --object-pose /object_pose --initial-pose=" + pose +
-                                                  " --initial-sigma " + sigma);
+    const test::CommandResult r = test::RunInhand(
+        "import " + (dir / rec) + " --out " + out + " --hand " +
+        orig.Resolve(orig.info().hand_urdf) + " --object " + orig.Resolve(orig.info().object) +
+        " --time-origin 0 --effort-is external --object-pose /object_pose --initial-pose=" + pose +
+        " --initial-sigma " + sigma);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     // Joints, camera poses and truth to the last digit; every image byte for byte.
     for (const char* file : {"joints.csv", "camera.csv", "groundtruth.csv"})
-      EXPECT_EQ(test::ReadFile(out + "/" + file), test::ReadFile(dir / ("orig/" + std::string(file)))) << file;
+      EXPECT_EQ(test::ReadFile(out + "/" + file),
+                test::ReadFile(dir / ("orig/" + std::string(file))))
+          << file;
     const Session imported = Session::Load(out);
     ASSERT_EQ(imported.camera_frames().size(), orig.camera_frames().size());
     for (std::size_t i = 0; i < orig.camera_frames().size(); ++i)
-      ASSERT_EQ(test::ReadFile(imported.Resolve(imported.camera_frames()[i].image)), test::ReadFile(orig.Resolve(orig.camera_frames()[i].image))) << i;
+      ASSERT_EQ(test::ReadFile(imported.Resolve(imported.camera_frames()[i].image)),
+                test::ReadFile(orig.Resolve(orig.camera_frames()[i].image)))
+          << i;
     EXPECT_EQ(imported.info().initial_T_PO.matrix(), T0.matrix());
     EXPECT_EQ(imported.info().camera->fx, orig.info().camera->fx);
     // And so the same estimates, for all four sets.
-    ASSERT_EQ(test::RunInhand("replay " + out + " --no-video --out " + out + "_replay").exit_code, 0);
+    ASSERT_EQ(test::RunInhand("replay " + out + " --no-video --out " + out + "_replay").exit_code,
+              0);
     EXPECT_EQ(test::ReadFile(out + "_replay/estimates.csv"), estimates);
   }
 }
@@ -95,20 +118,34 @@ TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
 // replay --mcap: the official MCAP reader (@mcap/core, CRCs checked) reads the export back, with
 // every topic, its foxglove schema, the expected message counts and the session's time span.
 TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
-  if (!HaveNodeTools()) GTEST_SKIP() << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
+  if (!HaveNodeTools())
+    GTEST_SKIP()
+        << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "sim")).exit_code, 0);
+  ASSERT_EQ(
+      test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "sim"))
+          .exit_code,
+      0);
   const Session s = Session::Load(dir / "sim");
-  ASSERT_EQ(test::RunInhand("replay " + (dir / "sim") + " --no-video --mcap --modalities j,jta --out " + (dir / "r")).exit_code, 0);
+  ASSERT_EQ(test::RunInhand("replay " + (dir / "sim") +
+                            " --no-video --mcap --modalities j,jta --out " + (dir / "r"))
+                .exit_code,
+            0);
   const std::string json_path = dir / "check.json";
-  ASSERT_EQ(std::system(("node " + tools + "/check_mcap.mjs " + (dir / "r/replay.mcap") + " > " + json_path).c_str()), 0);
+  ASSERT_EQ(std::system(
+                ("node " + tools + "/check_mcap.mjs " + (dir / "r/replay.mcap") + " > " + json_path)
+                    .c_str()),
+            0);
   const nlohmann::json j = nlohmann::json::parse(test::ReadFile(json_path));
   const long n = s.num_samples(), frames = static_cast<long>(s.camera_frames().size());
-  const auto count = [&](const std::string& topic) { return j.at("topics").at(topic).at("count").get<long>(); };
+  const auto count = [&](const std::string& topic) {
+    return j.at("topics").at(topic).at("count").get<long>();
+  };
   EXPECT_EQ(count("/inhand/pose/j"), n);
   EXPECT_EQ(count("/inhand/pose/jta"), n);
   EXPECT_EQ(count("/inhand/errors"), n);
-  EXPECT_EQ(count("/tf"), 3 * n + frames);  // two sets and the truth per sample, the camera per frame
+  EXPECT_EQ(count("/tf"),
+            3 * n + frames);  // two sets and the truth per sample, the camera per frame
   EXPECT_EQ(count("/camera/image"), frames);
   EXPECT_EQ(count("/camera/annotations"), frames);
   EXPECT_EQ(count("/inhand/contacts"), frames);

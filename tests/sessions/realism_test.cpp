@@ -28,17 +28,23 @@ namespace {
 
 TEST(RealismEffects, ListsGroupsAndNamesTheUnknown) {
   EXPECT_EQ(Effects::Parse("camera", "--effects").Names().size(), 8u);
-  EXPECT_EQ(Effects::Parse("all", "--effects").Names().size(), static_cast<std::size_t>(Effect::kCount));
+  EXPECT_EQ(Effects::Parse("all", "--effects").Names().size(),
+            static_cast<std::size_t>(Effect::kCount));
   const Effects e = Effects::Parse("hand.pads, torque", "--effects");
-  EXPECT_EQ(e.Names(), (std::vector<std::string>{"hand.pads", "torque.drift", "torque.residue", "torque.lag"}));
+  EXPECT_EQ(e.Names(), (std::vector<std::string>{"hand.pads", "torque.drift", "torque.residue",
+                                                 "torque.lag"}));
   EXPECT_FALSE(e.AnyCamera());
-  EXPECT_FALSE(Effects::Parse("camera.intrinsics", "x").AnyCamera());  // the session's numbers, not the image
-  EXPECT_EQ(Effects::All().Without(Effects::Parse("camera", "x")).Names().size(), static_cast<std::size_t>(Effect::kCount) - 8);
+  EXPECT_FALSE(Effects::Parse("camera.intrinsics", "x")
+                   .AnyCamera());  // the session's numbers, not the image
+  EXPECT_EQ(Effects::All().Without(Effects::Parse("camera", "x")).Names().size(),
+            static_cast<std::size_t>(Effect::kCount) - 8);
   try {
     Effects::Parse("hand.pads,camera.fog", "--without");
     FAIL() << "no error";
   } catch (const InputError& err) {
-    EXPECT_NE(std::string(err.what()).find("--without: effect 'camera.fog' is unknown"), std::string::npos) << err.what();
+    EXPECT_NE(std::string(err.what()).find("--without: effect 'camera.fog' is unknown"),
+              std::string::npos)
+        << err.what();
   }
   EXPECT_EQ(ParseNoiseProfile("realistic"), NoiseProfile::kRealistic);
 }
@@ -54,7 +60,8 @@ TEST(RealismObject, ScaledBoxHasTheScaledSizeMassAndInertia) {
   box.mass = 0.4;
   box.com_O = Vec3(0.01, 0, 0);
   const auto inertia = [](double m, const Vec3& h) {
-    return Vec3(m / 3 * (h.y() * h.y() + h.z() * h.z()), m / 3 * (h.x() * h.x() + h.z() * h.z()), m / 3 * (h.x() * h.x() + h.y() * h.y()));
+    return Vec3(m / 3 * (h.y() * h.y() + h.z() * h.z()), m / 3 * (h.x() * h.x() + h.z() * h.z()),
+                m / 3 * (h.x() * h.x() + h.y() * h.y()));
   };
   box.inertia_com = inertia(box.mass, half).asDiagonal();
   TagPlacement tag;
@@ -84,10 +91,12 @@ TEST(RealismObject, TagsMovedInTheirPlaneAndTurnedByTheGivenAmounts) {
   std::mt19937 rng(7);
   MisplaceTags(o, 0.0005, M_PI / 180, rng);
   for (std::size_t i = 0; i < o.tags.size(); ++i) {
-    const Vec3 d = before.tags[i].T_OT.linear().transpose() * (o.tags[i].T_OT.translation() - before.tags[i].T_OT.translation());
+    const Vec3 d = before.tags[i].T_OT.linear().transpose() *
+                   (o.tags[i].T_OT.translation() - before.tags[i].T_OT.translation());
     EXPECT_NEAR(d.norm(), 0.0005, 1e-12);
     EXPECT_NEAR(d.z(), 0.0, 1e-12);  // in the tag's plane
-    EXPECT_NEAR(RotationDistance(o.tags[i].T_OT.linear(), before.tags[i].T_OT.linear()), M_PI / 180, 1e-9);
+    EXPECT_NEAR(RotationDistance(o.tags[i].T_OT.linear(), before.tags[i].T_OT.linear()), M_PI / 180,
+                1e-9);
   }
 }
 
@@ -116,7 +125,9 @@ TEST(RealismHand, JointOriginsOffByTheirSigma) {
   ASSERT_EQ(offsets.size(), hand.joints.size());
   double sum2 = 0.0;
   for (std::size_t j = 0; j < hand.joints.size(); ++j) {
-    EXPECT_LT((w.joints[j].T_LJ.translation() - hand.joints[j].T_LJ.translation() - offsets[j]).norm(), 1e-15);
+    EXPECT_LT(
+        (w.joints[j].T_LJ.translation() - hand.joints[j].T_LJ.translation() - offsets[j]).norm(),
+        1e-15);
     sum2 += offsets[j].squaredNorm();
   }
   const double sigma = std::sqrt(sum2 / (3.0 * offsets.size()));
@@ -129,7 +140,9 @@ TEST(RealismHand, JointOriginsOffByTheirSigma) {
   b.Update(w, q);
   double worst = 0.0;
   for (std::size_t l = 0; l < hand.links.size(); ++l)
-    worst = std::max(worst, (a.T_PL(static_cast<int>(l)).translation() - b.T_PL(static_cast<int>(l)).translation()).norm());
+    worst = std::max(worst, (a.T_PL(static_cast<int>(l)).translation() -
+                             b.T_PL(static_cast<int>(l)).translation())
+                                .norm());
   EXPECT_GT(worst, 0.0003);
   EXPECT_LT(worst, 0.003);
 }
@@ -162,7 +175,8 @@ Csv ReadCsv(const std::string& path) {
   return c;
 }
 
-SimulationSummary Sim(const std::string& out, const std::string& effects, double duration_scale = 0.5,
+SimulationSummary Sim(const std::string& out, const std::string& effects,
+                      double duration_scale = 0.5,
                       const std::string& scenario = "ketchup-power-grasp") {
   SimulateOptions o;
   o.scenario = scenario;
@@ -184,7 +198,8 @@ TEST(RealisticSimulation, NoneStillGivesExactJointMeasurements) {
   for (std::size_t i = 1; i < truth.header.size(); ++i) {
     const int c = meas.Col("q:" + truth.header[i]);
     ASSERT_GE(c, 0) << truth.header[i];
-    for (std::size_t k = 0; k < meas.rows.size(); ++k) ASSERT_EQ(meas.rows[k][c], truth.rows[k][i]) << truth.header[i] << " sample " << k;
+    for (std::size_t k = 0; k < meas.rows.size(); ++k)
+      ASSERT_EQ(meas.rows[k][c], truth.rows[k][i]) << truth.header[i] << " sample " << k;
   }
 }
 
@@ -193,9 +208,16 @@ TEST(RealisticSimulation, JointDeflectionFollowsTorqueOverStiffness) {
   Sim(dir / "s", "hand.deflection");
   const Csv meas = ReadCsv(dir / "s/joints.csv"), truth = ReadCsv(dir / "s/truth/joints.csv");
   // The session states the nominal stiffness; each joint's true one is drawn around it.
-  const double nominal = RealismParams().joint_stiffness, sigma = RealismParams().joint_stiffness_sigma;
-  EXPECT_EQ(nlohmann::json::parse(test::ReadFile(dir / "s/session.json")).at("hand").at("joint_stiffness").get<double>(), nominal);
-  const nlohmann::json drawn = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json")).at("realism").at("joint_stiffness_Nm_per_rad");
+  const double nominal = RealismParams().joint_stiffness,
+               sigma = RealismParams().joint_stiffness_sigma;
+  EXPECT_EQ(nlohmann::json::parse(test::ReadFile(dir / "s/session.json"))
+                .at("hand")
+                .at("joint_stiffness")
+                .get<double>(),
+            nominal);
+  const nlohmann::json drawn = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json"))
+                                   .at("realism")
+                                   .at("joint_stiffness_Nm_per_rad");
   ASSERT_EQ(drawn.size(), truth.header.size() - 1);
   double largest = 0.0, sum_log = 0.0, sum_log2 = 0.0;
   for (std::size_t i = 1; i < truth.header.size(); ++i) {
@@ -209,7 +231,8 @@ TEST(RealisticSimulation, JointDeflectionFollowsTorqueOverStiffness) {
     sum_log2 += z * z;
     for (std::size_t s = 0; s < meas.rows.size(); ++s) {
       // The encoder (motor side) is ahead of the link by the load over the stiffness.
-      ASSERT_NEAR(meas.rows[s][q] - truth.rows[s][i], meas.rows[s][tau] / k, 1e-12) << truth.header[i] << " sample " << s;
+      ASSERT_NEAR(meas.rows[s][q] - truth.rows[s][i], meas.rows[s][tau] / k, 1e-12)
+          << truth.header[i] << " sample " << s;
       largest = std::max(largest, std::abs(meas.rows[s][q] - truth.rows[s][i]));
     }
   }
@@ -229,7 +252,8 @@ std::vector<Eigen::VectorXd> Torques(const Csv& c) {
   std::vector<Eigen::VectorXd> out;
   for (const auto& row : c.rows) {
     Eigen::VectorXd v(static_cast<int>(cols.size()));
-    for (std::size_t j = 0; j < cols.size(); ++j) v[static_cast<int>(j)] = row[static_cast<std::size_t>(cols[j])];
+    for (std::size_t j = 0; j < cols.size(); ++j)
+      v[static_cast<int>(j)] = row[static_cast<std::size_t>(cols[j])];
     out.push_back(v);
   }
   return out;
@@ -286,7 +310,8 @@ TEST(RealisticSimulation, FingertipPadsSinkUnderTheGraspForce) {
 TEST(RealisticSimulation, WorldObjectAndHandAreNotTheModels) {
   test::TempDir dir;
   Sim(dir / "s", "object.scale,hand.geometry", 0.2);
-  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json")).at("realism");
+  const nlohmann::json t =
+      nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json")).at("realism");
   const auto world = t.at("world_object_size_m").get<std::vector<double>>();
   const auto model = t.at("model_object_size_m").get<std::vector<double>>();
   const auto scale = t.at("object_scale").get<std::vector<double>>();
@@ -297,10 +322,13 @@ TEST(RealisticSimulation, WorldObjectAndHandAreNotTheModels) {
   }
   EXPECT_GT(off, 1e-4);
   EXPECT_LT(off, 0.025);  // 5 sigma
-  EXPECT_EQ(t.at("joint_origin_offsets_m").size(), LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf")).joints.size());
+  EXPECT_EQ(t.at("joint_origin_offsets_m").size(),
+            LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf")).joints.size());
   // The session still carries the nominal models.
-  EXPECT_EQ(test::ReadFile(dir / "s/model/object/ketchup_bottle.obj"), test::ReadFile(test::ProjectAsset("objects/ketchup_bottle/ketchup_bottle.obj")));
-  EXPECT_EQ(test::ReadFile(dir / "s/model/hand/inhand_hand.urdf"), test::ReadFile(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf")));
+  EXPECT_EQ(test::ReadFile(dir / "s/model/object/ketchup_bottle.obj"),
+            test::ReadFile(test::ProjectAsset("objects/ketchup_bottle/ketchup_bottle.obj")));
+  EXPECT_EQ(test::ReadFile(dir / "s/model/hand/inhand_hand.urdf"),
+            test::ReadFile(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf")));
 }
 
 // The estimator's object is a simplified mesh with its own decomposition; the world's is the
@@ -308,9 +336,12 @@ TEST(RealisticSimulation, WorldObjectAndHandAreNotTheModels) {
 TEST(RealisticSimulation, TheEstimatorGetsASimplifiedMeshWithItsOwnPieces) {
   test::TempDir dir;
   Sim(dir / "s", "object.mesh", 0.2);
-  const ObjectModel nominal = LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
+  const ObjectModel nominal =
+      LoadObjectModel(test::ProjectAsset("objects/ketchup_bottle/object.json"));
   const ObjectModel model = LoadObjectModel(dir / "s/model/object/object.json");
-  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json")).at("realism").at("simplified_model");
+  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "s/truth/truth.json"))
+                               .at("realism")
+                               .at("simplified_model");
   EXPECT_EQ(t.at("model_triangles").get<std::size_t>(), nominal.NumVisualTriangles());
   EXPECT_EQ(t.at("triangles").get<std::size_t>(), model.NumVisualTriangles());
   EXPECT_LT(model.NumVisualTriangles(), 0.7 * static_cast<double>(nominal.NumVisualTriangles()));
@@ -324,7 +355,8 @@ TEST(RealisticSimulation, TheEstimatorGetsASimplifiedMeshWithItsOwnPieces) {
       bool found = false;
       for (const TriangleMesh& n : nominal.visual)
         for (std::size_t j = 0; j < n.vertices.size() && !found; ++j)
-          found = (m.vertices[i] - n.vertices[j]).norm() < 1e-8 && (m.uvs.empty() || (m.uvs[i] - n.uvs[j]).norm() < 1e-8);
+          found = (m.vertices[i] - n.vertices[j]).norm() < 1e-8 &&
+                  (m.uvs.empty() || (m.uvs[i] - n.uvs[j]).norm() < 1e-8);
       ASSERT_TRUE(found) << "simplified vertex " << i << " is not a model vertex";
     }
   }
@@ -332,7 +364,8 @@ TEST(RealisticSimulation, TheEstimatorGetsASimplifiedMeshWithItsOwnPieces) {
   std::vector<const TriangleMesh*> a, b;
   for (const TriangleMesh& m : nominal.visual) a.push_back(&m);
   for (const TriangleMesh& m : model.visual) b.push_back(&m);
-  const double v_nominal = ComputeMassProperties(a).volume, v_model = ComputeMassProperties(b).volume;
+  const double v_nominal = ComputeMassProperties(a).volume,
+               v_model = ComputeMassProperties(b).volume;
   EXPECT_NEAR(v_model / v_nominal, 1.0, 0.02);
   // The pieces enclose the simplified surface (within 0.1 mm) and its volume (within 3 %).
   double v_pieces = 0.0;
@@ -348,7 +381,8 @@ TEST(RealisticSimulation, TheEstimatorGetsASimplifiedMeshWithItsOwnPieces) {
         double d = -std::numeric_limits<double>::infinity();  // most over the hull's planes
         for (const auto& tri : p.hull_triangles) {
           const Vec3& q0 = p.hull_vertices[static_cast<std::size_t>(tri[0])];
-          const Vec3 n = (p.hull_vertices[static_cast<std::size_t>(tri[1])] - q0).cross(p.hull_vertices[static_cast<std::size_t>(tri[2])] - q0);
+          const Vec3 n = (p.hull_vertices[static_cast<std::size_t>(tri[1])] - q0)
+                             .cross(p.hull_vertices[static_cast<std::size_t>(tri[2])] - q0);
           if (n.norm() > 0) d = std::max(d, n.normalized().dot(v - q0));
         }
         outside = std::min(outside, d);
@@ -358,7 +392,8 @@ TEST(RealisticSimulation, TheEstimatorGetsASimplifiedMeshWithItsOwnPieces) {
   // The world collides and renders the detailed mesh: with the effect off the session's model is
   // the asset's.
   Sim(dir / "n", "object.scale", 0.2);
-  EXPECT_EQ(test::ReadFile(dir / "n/model/object/object.json"), test::ReadFile(test::ProjectAsset("objects/ketchup_bottle/object.json")));
+  EXPECT_EQ(test::ReadFile(dir / "n/model/object/object.json"),
+            test::ReadFile(test::ProjectAsset("objects/ketchup_bottle/object.json")));
   EXPECT_FALSE(fs::exists(dir / "n/model/object/simplified.obj"));
 }
 
@@ -381,16 +416,22 @@ TEST(RealisticSimulation, SameSeedGivesByteIdenticalSessionsWithEveryEffect) {
   for (const auto& e : fs::recursive_directory_iterator(dir / "a"))
     if (e.is_regular_file()) files.push_back(fs::relative(e.path(), dir / "a").string());
   ASSERT_GT(files.size(), 10u);
-  for (const std::string& f : files) EXPECT_EQ(test::ReadFile(dir / ("b/" + f)), test::ReadFile(dir / ("a/" + f))) << f;
+  for (const std::string& f : files)
+    EXPECT_EQ(test::ReadFile(dir / ("b/" + f)), test::ReadFile(dir / ("a/" + f))) << f;
   run("c", 3);
-  EXPECT_NE(test::ReadFile(dir / "c/images/frame_000001.png"), test::ReadFile(dir / "a/images/frame_000001.png"));
+  EXPECT_NE(test::ReadFile(dir / "c/images/frame_000001.png"),
+            test::ReadFile(dir / "a/images/frame_000001.png"));
   // The session's camera is not the true one.
-  const nlohmann::json s = nlohmann::json::parse(test::ReadFile(dir / "a/session.json")).at("camera");
-  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "a/truth/truth.json")).at("realism").at("true_intrinsics");
+  const nlohmann::json s =
+      nlohmann::json::parse(test::ReadFile(dir / "a/session.json")).at("camera");
+  const nlohmann::json t = nlohmann::json::parse(test::ReadFile(dir / "a/truth/truth.json"))
+                               .at("realism")
+                               .at("true_intrinsics");
   EXPECT_NE(s.at("fx").get<double>(), t.at("fx").get<double>());
   EXPECT_NEAR(s.at("fx").get<double>() / t.at("fx").get<double>(), 1.0, 0.025);
   EXPECT_NEAR(s.at("cx").get<double>(), t.at("cx").get<double>(), 10.0);
-  const double k1_session = s.at("distortion")[0].get<double>(), k1_true = t.at("distortion")[0].get<double>();
+  const double k1_session = s.at("distortion")[0].get<double>(),
+               k1_true = t.at("distortion")[0].get<double>();
   EXPECT_NE(k1_session, k1_true);
   EXPECT_NEAR(k1_session / k1_true, 1.0, 0.25);
 }
@@ -421,15 +462,18 @@ TEST(CameraSimulator, LensDistortionMovesPointsWhereItsCoefficientsSay) {
   Intrinsics K = SmallCamera();
   RealismParams p;
   K.distortion = p.distortion;
-  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.distortion", "test"), LightRig(), 1);
+  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.distortion", "test"), LightRig(),
+                         1);
   EXPECT_GT(camera.margin(), 5);
   Scene scene;
   scene.K = SmallCamera();
   scene.T_PC = Transform::Identity();
   const int square = FlatBox(renderer, Vec3(0.003, 0.003, 0.0005), Eigen::Vector4d(1, 1, 1, 1));
-  const std::vector<Vec2> ideal = {{30, 25}, {290, 25}, {30, 215}, {290, 215}, {160, 120}, {100, 60}};
+  const std::vector<Vec2> ideal = {{30, 25},   {290, 25},  {30, 215},
+                                   {290, 215}, {160, 120}, {100, 60}};
   for (const Vec2& u : ideal)
-    scene.items.push_back({square, MakeTransform(scene.K.Unproject(u, 0.5), Mat3::Identity()), 1, std::nullopt, 1.0, true});
+    scene.items.push_back({square, MakeTransform(scene.K.Unproject(u, 0.5), Mat3::Identity()), 1,
+                           std::nullopt, 1.0, true});
   Image8 out;
   camera.Capture({scene}, out);
   for (const Vec2& u : ideal) {
@@ -437,7 +481,8 @@ TEST(CameraSimulator, LensDistortionMovesPointsWhereItsCoefficientsSay) {
     double w = 0.0;
     Vec2 c = Vec2::Zero();
     for (int y = static_cast<int>(expected.y()) - 10; y <= static_cast<int>(expected.y()) + 10; ++y)
-      for (int x = static_cast<int>(expected.x()) - 10; x <= static_cast<int>(expected.x()) + 10; ++x) {
+      for (int x = static_cast<int>(expected.x()) - 10; x <= static_cast<int>(expected.x()) + 10;
+           ++x) {
         if (x < 0 || y < 0 || x >= K.width || y >= K.height) continue;
         const double v = Linear(out.pixel(x, y)[1]);
         w += v;
@@ -445,7 +490,8 @@ TEST(CameraSimulator, LensDistortionMovesPointsWhereItsCoefficientsSay) {
       }
     ASSERT_GT(w, 1.0) << "nothing seen near " << expected.transpose();
     c /= w;
-    EXPECT_LT((c - expected).norm(), 0.3) << "ideal " << u.transpose() << " expected " << expected.transpose() << " seen " << c.transpose();
+    EXPECT_LT((c - expected).norm(), 0.3) << "ideal " << u.transpose() << " expected "
+                                          << expected.transpose() << " seen " << c.transpose();
     if ((u - Vec2(160, 120)).norm() > 150) {
       EXPECT_GT((expected - u).norm(), 5.0);  // the lens moves the corners
     }
@@ -476,13 +522,17 @@ TEST(CameraSimulator, CastShadowsWhereTheLampIsOccluded) {
   LightRig light;
   light.lamp = Vec3(0, 0, 1.0);
   light.lamp_target = Vec3(0, 0, 0);
-  CameraSimulator camera(renderer, K, RealismParams(), Effects::Parse("camera.light", "test"), light, 1);
+  CameraSimulator camera(renderer, K, RealismParams(), Effects::Parse("camera.light", "test"),
+                         light, 1);
   Scene scene;
   scene.K = K;
   scene.T_PC = LookAt(Vec3(0.5, 0.05, 0.9), Vec3(0, 0, 0), Vec3::UnitZ());
   const Vec3 half(0.05, 0.05, 0.01), centre(0, 0, 0.3);
-  scene.items.push_back({FlatBox(renderer, Vec3(0.5, 0.5, 0.01), Eigen::Vector4d(0.7, 0.7, 0.7, 1)), MakeTransform(Vec3(0, 0, -0.01), Mat3::Identity()), 1, std::nullopt, 1.0, false});
-  scene.items.push_back({FlatBox(renderer, half, Eigen::Vector4d(0.3, 0.3, 0.8, 1)), MakeTransform(centre, Mat3::Identity()), 2, std::nullopt, 1.0, false});
+  scene.items.push_back({FlatBox(renderer, Vec3(0.5, 0.5, 0.01), Eigen::Vector4d(0.7, 0.7, 0.7, 1)),
+                         MakeTransform(Vec3(0, 0, -0.01), Mat3::Identity()), 1, std::nullopt, 1.0,
+                         false});
+  scene.items.push_back({FlatBox(renderer, half, Eigen::Vector4d(0.3, 0.3, 0.8, 1)),
+                         MakeTransform(centre, Mat3::Identity()), 2, std::nullopt, 1.0, false});
   const std::vector<float> rgb = camera.Radiance(scene);
   const int m = camera.margin(), W = K.width + 2 * m;
   double shadow = 0.0, lit = 0.0;
@@ -501,7 +551,9 @@ TEST(CameraSimulator, CastShadowsWhereTheLampIsOccluded) {
       if (SegmentHitsBox(P, light.lamp, centre - half + grow, centre + half - grow)) {
         shadow += g;
         ++n_shadow;
-      } else if (!SegmentHitsBox(P, light.lamp, centre - half - 2 * grow, centre + half + 2 * grow) && P.norm() < 0.2) {
+      } else if (!SegmentHitsBox(P, light.lamp, centre - half - 2 * grow,
+                                 centre + half + 2 * grow) &&
+                 P.norm() < 0.2) {
         lit += g;
         ++n_lit;
       }
@@ -517,11 +569,14 @@ TEST(CameraSimulator, CastShadowsWhereTheLampIsOccluded) {
 Scene GreyWall(Renderer& renderer, const Intrinsics& K, double grey) {
   Scene scene;
   scene.K = K;
-  scene.items.push_back({FlatBox(renderer, Vec3(2, 2, 0.01), Eigen::Vector4d(grey, grey, grey, 1)), MakeTransform(Vec3(0, 0, 1.0), Mat3::Identity()), 1, std::nullopt, 1.0, true});
+  scene.items.push_back({FlatBox(renderer, Vec3(2, 2, 0.01), Eigen::Vector4d(grey, grey, grey, 1)),
+                         MakeTransform(Vec3(0, 0, 1.0), Mat3::Identity()), 1, std::nullopt, 1.0,
+                         true});
   return scene;
 }
 
-double MeanLinear(const Image8& img, int x0, int y0, int size, int channel, double* stddev = nullptr) {
+double MeanLinear(const Image8& img, int x0, int y0, int size, int channel,
+                  double* stddev = nullptr) {
   double s = 0.0, s2 = 0.0;
   for (int y = y0; y < y0 + size; ++y)
     for (int x = x0; x < x0 + size; ++x) {
@@ -538,11 +593,13 @@ TEST(CameraSimulator, VignettingDarkensTheCornersByItsAmount) {
   Renderer renderer;
   const Intrinsics K = SmallCamera();
   RealismParams p;
-  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.vignetting", "test"), LightRig(), 1);
+  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.vignetting", "test"), LightRig(),
+                         1);
   Image8 out;
   camera.Capture({GreyWall(renderer, K, 0.8)}, out);
   const double centre = MeanLinear(out, 155, 115, 10, 1), corner = MeanLinear(out, 0, 0, 3, 1);
-  const double r2 = (Vec2(1, 1) - Vec2(K.cx, K.cy)).squaredNorm() / (0.25 * (320.0 * 320 + 240.0 * 240));
+  const double r2 =
+      (Vec2(1, 1) - Vec2(K.cx, K.cy)).squaredNorm() / (0.25 * (320.0 * 320 + 240.0 * 240));
   EXPECT_NEAR(corner / centre, 1.0 - p.vignetting * r2, 0.02);
 }
 
@@ -550,7 +607,8 @@ TEST(CameraSimulator, ExposureDriftsFromFrameToFrameAndSensorNoiseFollowsTheSign
   Renderer renderer;
   const Intrinsics K = SmallCamera();
   RealismParams p;
-  CameraSimulator camera(renderer, K, p, Effects::Parse("camera.exposure,camera.sensor_noise", "test"), LightRig(), 4);
+  CameraSimulator camera(
+      renderer, K, p, Effects::Parse("camera.exposure,camera.sensor_noise", "test"), LightRig(), 4);
   const Scene wall = GreyWall(renderer, K, 0.7);
   std::vector<double> log_means;
   double noise_ratio = 0.0;
@@ -560,7 +618,8 @@ TEST(CameraSimulator, ExposureDriftsFromFrameToFrameAndSensorNoiseFollowsTheSign
     double sd = 0.0;
     const double mean = MeanLinear(out, 100, 80, 60, 1, &sd);
     log_means.push_back(std::log(mean));
-    // Shot noise sqrt(e) and read noise in electrons, at this frame's signal (quantisation adds a little).
+    // Shot noise sqrt(e) and read noise in electrons, at this frame's signal (quantisation adds a
+    // little).
     const double e = mean * p.full_well;
     noise_ratio += sd / (std::sqrt(e + p.read_noise * p.read_noise) / p.full_well) / 40.0;
   }
@@ -575,13 +634,15 @@ TEST(CameraSimulator, ExposureDriftsFromFrameToFrameAndSensorNoiseFollowsTheSign
 TEST(CameraSimulator, MotionBlurAveragesTheSubFrames) {
   Renderer renderer;
   const Intrinsics K = SmallCamera();
-  CameraSimulator camera(renderer, K, RealismParams(), Effects::Parse("camera.motion_blur", "test"), LightRig(), 1);
+  CameraSimulator camera(renderer, K, RealismParams(), Effects::Parse("camera.motion_blur", "test"),
+                         LightRig(), 1);
   const int square = FlatBox(renderer, Vec3(0.02, 0.02, 0.001), Eigen::Vector4d(1, 1, 1, 1));
   std::vector<Scene> frames;
   for (int i = 0; i < 3; ++i) {  // 10 px apart at 0.5 m
     Scene s;
     s.K = K;
-    s.items.push_back({square, MakeTransform(Vec3(i * 10 * 0.5 / K.fx, 0, 0.5), Mat3::Identity()), 1, std::nullopt, 1.0, true});
+    s.items.push_back({square, MakeTransform(Vec3(i * 10 * 0.5 / K.fx, 0, 0.5), Mat3::Identity()),
+                       1, std::nullopt, 1.0, true});
     frames.push_back(s);
   }
   const auto partial = [&](const Image8& img) {

@@ -61,10 +61,12 @@ std::string WriteSession(const test::TempDir& dir, const std::string& name = "s"
       tau[j] = -0.05 * j + 0.1 * std::sin(k);
     }
     w.AddJointSample(0.001 * k, q, tau);
-    w.AddGroundTruth(0.001 * k, MakeTransform(Vec3(0.001 * k, 0, 0.05), ExpSO3(Vec3(0, 0, 0.01 * k))));
+    w.AddGroundTruth(0.001 * k,
+                     MakeTransform(Vec3(0.001 * k, 0, 0.05), ExpSO3(Vec3(0, 0, 0.01 * k))));
   }
   for (int f = 0; f < 3; ++f)
-    w.AddCameraFrame(0.015 * f, Pattern(f), MakeTransform(Vec3(0.1, -0.3, 0.4), ExpSO3(Vec3(1.2, 0, 0.1 * f))));
+    w.AddCameraFrame(0.015 * f, Pattern(f),
+                     MakeTransform(Vec3(0.1, -0.3, 0.4), ExpSO3(Vec3(1.2, 0, 0.1 * f))));
   w.AddFile("truth/biases.json", "{\"biases\": []}\n");
   w.Commit();
   return dir / name;
@@ -99,8 +101,11 @@ TEST(Session, WriteReadRoundTripIsExact) {
   const SessionModels models = LoadSessionModels(s, false);
   EXPECT_EQ(s.joint_names(), file_order);
   ASSERT_EQ(models.joint_columns.size(), 16u);
-  for (std::size_t j = 0; j < 16; ++j) EXPECT_EQ(s.joint_names()[static_cast<std::size_t>(models.joint_columns[j])], models.hand.QNames()[j]);
-  EXPECT_EQ(s.q(3)[models.joint_columns[0]], 0.01 * 15 + 1e-3 * 3 + 1.0 / 3.0);  // index_abduction, first in the URDF
+  for (std::size_t j = 0; j < 16; ++j)
+    EXPECT_EQ(s.joint_names()[static_cast<std::size_t>(models.joint_columns[j])],
+              models.hand.QNames()[j]);
+  EXPECT_EQ(s.q(3)[models.joint_columns[0]],
+            0.01 * 15 + 1e-3 * 3 + 1.0 / 3.0);  // index_abduction, first in the URDF
   EXPECT_EQ(models.object.name, "ketchup_bottle");
 }
 
@@ -111,25 +116,29 @@ TEST(Session, JointStiffnessReachesTheHandByName) {
   SessionInfo info = Info();
   info.joint_stiffness = {{"*", 20.0}, {"thumb_flex1", 35.0}};
   SessionWriter w(dir / "s", info, LoadHandModel(test::ProjectAsset(kHand), {{}, false}).QNames());
-  for (int k = 0; k < 3; ++k) w.AddJointSample(0.001 * k, Eigen::VectorXd::Zero(16), Eigen::VectorXd::Zero(16));
+  for (int k = 0; k < 3; ++k)
+    w.AddJointSample(0.001 * k, Eigen::VectorXd::Zero(16), Eigen::VectorXd::Zero(16));
   w.Commit();
   const Session s = Session::Load(dir / "s");
   EXPECT_EQ(s.info().joint_stiffness, info.joint_stiffness);
   const SessionModels models = LoadSessionModels(s, false);
   const std::vector<std::string> names = models.hand.QNames();
   ASSERT_EQ(models.hand.joint_stiffness.size(), 16u);
-  for (std::size_t j = 0; j < 16; ++j) EXPECT_EQ(models.hand.joint_stiffness[j], names[j] == "thumb_flex1" ? 35.0 : 20.0) << names[j];
+  for (std::size_t j = 0; j < 16; ++j)
+    EXPECT_EQ(models.hand.joint_stiffness[j], names[j] == "thumb_flex1" ? 35.0 : 20.0) << names[j];
 
   // One number for every joint is written as a number.
   info.joint_stiffness = {{"*", 12.5}};
   SessionWriter w2(dir / "t", info, names);
   w2.AddJointSample(0.0, Eigen::VectorXd::Zero(16), Eigen::VectorXd::Zero(16));
   w2.Commit();
-  EXPECT_NE(test::ReadFile(dir / "t/session.json").find("\"joint_stiffness\": 12.5"), std::string::npos);
+  EXPECT_NE(test::ReadFile(dir / "t/session.json").find("\"joint_stiffness\": 12.5"),
+            std::string::npos);
   const SessionModels rigid_unless_named = LoadSessionModels(Session::Load(dir / "t"), false);
   EXPECT_EQ(rigid_unless_named.hand.joint_stiffness, std::vector<double>(16, 12.5));
   // Without the field every joint is rigid.
-  EXPECT_TRUE(LoadSessionModels(Session::Load(WriteSession(dir, "u")), false).hand.joint_stiffness.empty());
+  EXPECT_TRUE(
+      LoadSessionModels(Session::Load(WriteSession(dir, "u")), false).hand.joint_stiffness.empty());
 }
 
 TEST(Session, WriterIsAllOrNothing) {
@@ -150,7 +159,8 @@ class BadSession : public ::testing::Test {
   void SetUp() override { path_ = WriteSession(dir_); }
   void Replace(const std::string& file, const std::string& pattern, const std::string& with) {
     const std::string text = test::ReadFile(path_ + "/" + file);
-    const std::string out = std::regex_replace(text, std::regex(pattern), with, std::regex_constants::format_first_only);
+    const std::string out = std::regex_replace(text, std::regex(pattern), with,
+                                               std::regex_constants::format_first_only);
     ASSERT_NE(out, text) << "pattern not found: " << pattern;
     std::ofstream(path_ + "/" + file) << out;
   }
@@ -161,7 +171,8 @@ class BadSession : public ::testing::Test {
       ADD_FAILURE() << "accepted";
     } catch (const InputError& e) {
       for (const auto& f : fragments)
-        EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what() << "\nmissing: " << f;
+        EXPECT_NE(std::string(e.what()).find(f), std::string::npos)
+            << e.what() << "\nmissing: " << f;
     }
   }
   test::TempDir dir_;
@@ -217,7 +228,8 @@ TEST_F(BadSession, MalformedJson) {
 TEST_F(BadSession, JointStiffness) {
   const std::string good = test::ReadFile(path_ + "/session.json");
   const auto with = [&](const std::string& value) {
-    std::ofstream(path_ + "/session.json") << std::regex_replace(good, std::regex("\"hand\": \\{"), "\"hand\": {\"joint_stiffness\": " + value + ",");
+    std::ofstream(path_ + "/session.json") << std::regex_replace(
+        good, std::regex("\"hand\": \\{"), "\"hand\": {\"joint_stiffness\": " + value + ",");
   };
   with("-20");
   ExpectError({"session.json", "'hand.joint_stiffness'", "-20"});
@@ -232,7 +244,8 @@ TEST_F(BadSession, JointStiffness) {
   with("{\"pinky_flex2\": 20}");
   ExpectError({"session.json", "'hand.joint_stiffness.pinky_flex2'", "no independent joint"}, true);
   with("{\"index_flex1\": 20, \"*\": 30}");
-  EXPECT_EQ(LoadSessionModels(Session::Load(path_), false).hand.joint_stiffness[1], 20.0);  // index_flex1, second in the URDF
+  EXPECT_EQ(LoadSessionModels(Session::Load(path_), false).hand.joint_stiffness[1],
+            20.0);  // index_flex1, second in the URDF
 }
 
 TEST_F(BadSession, ImpossibleIntrinsics) {
@@ -243,7 +256,8 @@ TEST_F(BadSession, ImpossibleIntrinsics) {
 // Numbers no recording can hold are refused by name, not carried into the filter: a camera
 // 1e300 m away, a time of 1e300 s, an initial pose 1e300 m off, distortion of 1e6.
 TEST_F(BadSession, AbsurdMagnitudes) {
-  const std::string camera = test::ReadFile(path_ + "/camera.csv"), joints = test::ReadFile(path_ + "/joints.csv"),
+  const std::string camera = test::ReadFile(path_ + "/camera.csv"),
+                    joints = test::ReadFile(path_ + "/joints.csv"),
                     json = test::ReadFile(path_ + "/session.json");
   const auto restore = [&] {
     std::ofstream(path_ + "/camera.csv") << camera;
@@ -272,7 +286,8 @@ TEST_F(BadSession, NonUnitQuaternion) {
 TEST_F(BadSession, UnknownPackageAndMissingMesh) {
   test::TempDir hand_dir;
   hand_dir.Write("h.urdf",
-                 "<robot name='r'><link name='palm'><visual><geometry><mesh filename='package://nowhere/x.stl'/>"
+                 "<robot name='r'><link name='palm'><visual><geometry><mesh "
+                 "filename='package://nowhere/x.stl'/>"
                  "</geometry></visual></link></robot>");
   Replace("session.json", "\"urdf\": \"[^\"]*\"", "\"urdf\": \"" + (hand_dir / "h.urdf") + "\"");
   ExpectError({"unknown package 'nowhere'"}, true);

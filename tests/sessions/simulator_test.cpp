@@ -69,7 +69,9 @@ TEST(Simulator, EveryScenarioRoundTripsThroughTheReader) {
     // Ground truth is continuous: no jump larger than 5 mm between samples at 500 Hz.
     double worst = 0.0;
     for (std::size_t k = 1; k < session.groundtruth().size(); ++k)
-      worst = std::max(worst, (session.groundtruth()[k].T_PO.translation() - session.groundtruth()[k - 1].T_PO.translation()).norm());
+      worst = std::max(worst, (session.groundtruth()[k].T_PO.translation() -
+                               session.groundtruth()[k - 1].T_PO.translation())
+                                  .norm());
     EXPECT_LT(worst, 0.005) << s.name;
     EXPECT_LT(summary.max_penetration, 0.001) << s.name;
     if (o.images) {
@@ -78,12 +80,15 @@ TEST(Simulator, EveryScenarioRoundTripsThroughTheReader) {
     }
     // The initial estimate is off as in the paper's experiment: from the tracking system (2 mm,
     // 1°), set 20 mm too high (ketchup, the orientation still the tracker's), or by hand (pen).
-    const auto truth = nlohmann::json::parse(Read(fs::path(dir / s.name) / "truth/truth.json"))["true_initial_T_PO"];
+    const auto truth = nlohmann::json::parse(
+        Read(fs::path(dir / s.name) / "truth/truth.json"))["true_initial_T_PO"];
     const auto& xyz = truth["xyz"];
     const auto& q = truth["quat_wxyz"];
-    const Transform T_true = MakeTransform(Vec3(xyz[0], xyz[1], xyz[2]), Quat(q[0], q[1], q[2], q[3]).toRotationMatrix());
+    const Transform T_true = MakeTransform(Vec3(xyz[0], xyz[1], xyz[2]),
+                                           Quat(q[0], q[1], q[2], q[3]).toRotationMatrix());
     const Transform& T_init = session.info().initial_T_PO;
-    const Vec3 error_O = T_true.linear().transpose() * (T_init.translation() - T_true.translation());
+    const Vec3 error_O =
+        T_true.linear().transpose() * (T_init.translation() - T_true.translation());
     const double angle = LogSO3(T_init.linear() * T_true.linear().transpose()).norm();
     const bool too_high = s.name == "ketchup-power-grasp", by_hand = s.name == "pen-fingertip";
     EXPECT_NEAR(error_O.norm(), too_high || by_hand ? 0.020 : 0.002, 1e-9) << s.name;
@@ -150,10 +155,16 @@ void ExpectPinchedLiftedAndRolled(const std::string& scenario) {
   EXPECT_GT(s.max_in_hand_rotation_deg, 10.0);
 }
 
-TEST(SimulatorPhysics, BrushIsPinchedLiftedAndRolledInTheFingers) { ExpectPinchedLiftedAndRolled("brush-rotation"); }
-TEST(SimulatorPhysics, PenIsPinchedLiftedAndRolledInTheFingers) { ExpectPinchedLiftedAndRolled("pen-fingertip"); }
+TEST(SimulatorPhysics, BrushIsPinchedLiftedAndRolledInTheFingers) {
+  ExpectPinchedLiftedAndRolled("brush-rotation");
+}
+TEST(SimulatorPhysics, PenIsPinchedLiftedAndRolledInTheFingers) {
+  ExpectPinchedLiftedAndRolled("pen-fingertip");
+}
 
-TEST(SimulatorPhysics, ShampooIsHeldAndLifted) { ExpectHeldAndLifted(Physics("shampoo-grasp"), 0.08); }
+TEST(SimulatorPhysics, ShampooIsHeldAndLifted) {
+  ExpectHeldAndLifted(Physics("shampoo-grasp"), 0.08);
+}
 
 }  // namespace
 }  // namespace inhand

@@ -16,8 +16,8 @@ TempDir::TempDir() {
   std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "tmp";
   for (char& c : name)
     if (c == '/') c = '_';
-  path_ = (std::filesystem::temp_directory_path() /
-           ("inhand-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "-" + name))
+  path_ = (std::filesystem::temp_directory_path() / ("inhand-test-" + std::to_string(::getpid()) +
+                                                     "-" + std::to_string(counter++) + "-" + name))
               .string();
   std::filesystem::remove_all(path_);
   std::filesystem::create_directories(path_);
@@ -35,7 +35,8 @@ void TempDir::Write(const std::string& rel, const std::string& contents) const {
 }
 
 CommandResult RunInhand(const std::string& args, const std::string& prefix) {
-  const std::string cmd = (prefix.empty() ? "" : prefix + " ") + std::string(INHAND_BINARY) + " " + args + " 2>&1";
+  const std::string cmd =
+      (prefix.empty() ? "" : prefix + " ") + std::string(INHAND_BINARY) + " " + args + " 2>&1";
   CommandResult r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (pipe == nullptr) return r;

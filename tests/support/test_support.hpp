@@ -16,13 +16,14 @@ inline std::string ProjectAsset(const std::string& rel) { return SourceDir() + "
 
 // ../shared/assets beside the repository, or "" when absent (tests then skip).
 inline std::string SharedAssets() {
-  const std::filesystem::path p = std::filesystem::path(SourceDir()).parent_path() / "shared" / "assets";
+  const std::filesystem::path p =
+      std::filesystem::path(SourceDir()).parent_path() / "shared" / "assets";
   return std::filesystem::is_directory(p) ? p.string() : std::string();
 }
 
-#define INHAND_REQUIRE_SHARED_ASSETS()                                            \
-  do {                                                                            \
-    if (::inhand::test::SharedAssets().empty())                                   \
+#define INHAND_REQUIRE_SHARED_ASSETS()                                             \
+  do {                                                                             \
+    if (::inhand::test::SharedAssets().empty())                                    \
       GTEST_SKIP() << "../shared/assets is absent: third-party assets not tested"; \
   } while (false)
 

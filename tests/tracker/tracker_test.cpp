@@ -8,11 +8,11 @@
 #include <sstream>
 #include <thread>
 
+#include "history.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/sessions/session.hpp"
 #include "inhand/sessions/simulator.hpp"
 #include "inhand/tracker/tracker.hpp"
-#include "history.hpp"
 #include "tag_corners.hpp"
 #include "test_support.hpp"
 
@@ -43,23 +43,30 @@ struct Recording {
       }
       q.push_back(qk), tau.push_back(tk);
     }
-    for (std::size_t f = 0; f < session.camera_frames().size(); ++f) images.push_back(session.LoadImage(static_cast<int>(f)));
+    for (std::size_t f = 0; f < session.camera_frames().size(); ++f)
+      images.push_back(session.LoadImage(static_cast<int>(f)));
   }
   static Session Load(const test::TempDir& dir) {
-    const auto r = test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "s"));
+    const auto r =
+        test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " + (dir / "s"));
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return Session::Load(dir / "s");
   }
 };
 
 Modalities Set(const std::string& name) {
-  return {name.find('t') != std::string::npos, name.find('a') != std::string::npos, name.find('f') != std::string::npos};
+  return {name.find('t') != std::string::npos, name.find('a') != std::string::npos,
+          name.find('f') != std::string::npos};
 }
 
-std::unique_ptr<Tracker> Make(const Recording& r, const std::string& set, TrackerOptions options = {}) {
-  auto tracker = std::make_unique<Tracker>(r.models.hand, r.models.object, Set(set), TrackerParams(), options);
+std::unique_ptr<Tracker> Make(const Recording& r, const std::string& set,
+                              TrackerOptions options = {}) {
+  auto tracker =
+      std::make_unique<Tracker>(r.models.hand, r.models.object, Set(set), TrackerParams(), options);
   const SessionInfo& info = r.session.info();
-  tracker->Start(r.session.t(0), info.initial_T_PO, StartSigmas{info.sigma_position, info.sigma_orientation, info.sigma_joint_bias, {}});
+  tracker->Start(
+      r.session.t(0), info.initial_T_PO,
+      StartSigmas{info.sigma_position, info.sigma_orientation, info.sigma_joint_bias, {}});
   return tracker;
 }
 
@@ -67,10 +74,12 @@ std::unique_ptr<Tracker> Make(const Recording& r, const std::string& set, Tracke
 // its capture time plus `delay` (frames reached before `from` are not fed again); `each` sees the
 // tracker after every sample.
 template <typename Each>
-void Feed(const Recording& r, Tracker& tracker, int n, double delay, Each&& each, std::size_t stride = 1, int from = 0) {
+void Feed(const Recording& r, Tracker& tracker, int n, double delay, Each&& each,
+          std::size_t stride = 1, int from = 0) {
   const auto& frames = r.session.camera_frames();
   std::size_t next = 0;
-  while (from > 0 && next < frames.size() && frames[next].t + delay <= r.session.t(from - 1) + 1e-9) next += stride;
+  while (from > 0 && next < frames.size() && frames[next].t + delay <= r.session.t(from - 1) + 1e-9)
+    next += stride;
   for (int k = from; k < n; ++k) {
     const double t = r.session.t(k);
     tracker.AddJointSample(t, r.q[static_cast<std::size_t>(k)], r.tau[static_cast<std::size_t>(k)]);
@@ -83,7 +92,8 @@ void Feed(const Recording& r, Tracker& tracker, int n, double delay, Each&& each
 }
 
 double PoseDifference(const Transform& a, const Transform& b) {
-  return std::max((a.translation() - b.translation()).norm(), RotationDistance(a.linear(), b.linear()));
+  return std::max((a.translation() - b.translation()).norm(),
+                  RotationDistance(a.linear(), b.linear()));
 }
 
 // A frame delivered 33 or 120 ms after its capture, behind 16 or 60 later joint samples, is
@@ -98,28 +108,43 @@ TEST(Tracker, LateImagesAreFusedAtTheirCaptureTime) {
     std::vector<Transform> in_order;
     std::vector<Eigen::MatrixXd> in_order_P;
     auto reference = Make(r, set);
-    Feed(r, *reference, n, 0.0, [&](int) { in_order.push_back(reference->T_PO()), in_order_P.push_back(reference->covariance()); }, 2);
+    Feed(
+        r, *reference, n, 0.0,
+        [&](int) {
+          in_order.push_back(reference->T_PO()), in_order_P.push_back(reference->covariance());
+        },
+        2);
     EXPECT_GE(reference->stats().images_fused, 14);
     for (const double delay : {0.033, 0.120}) {
       auto tracker = Make(r, set);
       double worst = 0.0, worst_P = 0.0;
       int compared = 0;
-      Feed(r, *tracker, n, delay, [&](int k) {
-        const double t = r.session.t(k);
-        bool pending = false;
-        for (std::size_t f = 0; f < frames.size(); f += 2) pending = pending || (frames[f].t <= t + 1e-9 && frames[f].t + delay > t + 1e-9);
-        if (pending) return;
-        worst = std::max(worst, PoseDifference(tracker->T_PO(), in_order[static_cast<std::size_t>(k)]));
-        worst_P = std::max(worst_P, (tracker->covariance() - in_order_P[static_cast<std::size_t>(k)]).cwiseAbs().maxCoeff());
-        ++compared;
-      }, 2);
+      Feed(
+          r, *tracker, n, delay,
+          [&](int k) {
+            const double t = r.session.t(k);
+            bool pending = false;
+            for (std::size_t f = 0; f < frames.size(); f += 2)
+              pending = pending || (frames[f].t <= t + 1e-9 && frames[f].t + delay > t + 1e-9);
+            if (pending) return;
+            worst = std::max(
+                worst, PoseDifference(tracker->T_PO(), in_order[static_cast<std::size_t>(k)]));
+            worst_P =
+                std::max(worst_P, (tracker->covariance() - in_order_P[static_cast<std::size_t>(k)])
+                                      .cwiseAbs()
+                                      .maxCoeff());
+            ++compared;
+          },
+          2);
       const TrackerStats stats = tracker->stats();
       EXPECT_LE(worst, 1e-9) << set << " delayed " << delay << " s";
       EXPECT_LE(worst_P, 1e-12) << set << " delayed " << delay << " s";
       EXPECT_GT(compared, n / 5) << set << " delayed " << delay << " s";
-      EXPECT_GE(stats.images_fused, reference->stats().images_fused - 1);  // the last may still be on its way
-      EXPECT_EQ(stats.rewinds, stats.images_fused);  // every frame came late
-      EXPECT_GE(stats.samples_replayed, stats.images_fused * static_cast<long>(std::floor(delay * 500 - 1)));
+      EXPECT_GE(stats.images_fused,
+                reference->stats().images_fused - 1);  // the last may still be on its way
+      EXPECT_EQ(stats.rewinds, stats.images_fused);    // every frame came late
+      EXPECT_GE(stats.samples_replayed,
+                stats.images_fused * static_cast<long>(std::floor(delay * 500 - 1)));
     }
   }
 }
@@ -176,10 +201,15 @@ TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
   for (const std::string set : {"jt", "jtf"}) {
     Tracker tracker(r.models.hand, r.models.object, Set(set), TrackerParams());
     tracker.Start(r.session.t(0), start, sigmas);
-    Feed(r, tracker, n, 0.0, [&](int) { relocalized = std::max(relocalized, tracker.last_visual().relocalized); });
-    EXPECT_EQ(tracker.stats().relocalizations, set == "jtf" ? 1 : 0) << set;  // once found, it is not lost again
-    EXPECT_EQ(tracker.stats().images_features_lost, set == "jtf" ? 1 : 0) << set;  // the frame before it
-    error[set] = (tracker.T_PO().translation() - r.session.GroundTruthAt(r.session.t(n - 1)).translation()).norm();
+    Feed(r, tracker, n, 0.0,
+         [&](int) { relocalized = std::max(relocalized, tracker.last_visual().relocalized); });
+    EXPECT_EQ(tracker.stats().relocalizations, set == "jtf" ? 1 : 0)
+        << set;  // once found, it is not lost again
+    EXPECT_EQ(tracker.stats().images_features_lost, set == "jtf" ? 1 : 0)
+        << set;  // the frame before it
+    error[set] =
+        (tracker.T_PO().translation() - r.session.GroundTruthAt(r.session.t(n - 1)).translation())
+            .norm();
   }
   EXPECT_GT(error["jt"], 0.02);
   EXPECT_LT(error["jtf"], 0.008);
@@ -212,11 +242,14 @@ TEST(Tracker, TagsSeenWhereTheEstimateCannotBeMoveTheEstimateThere) {
     int first = -1;
     Feed(r, tracker, n, 0.0, [&](int) {
       relocalized = std::max(relocalized, tracker.last_visual().relocalized);
-      if (first < 0 && tracker.stats().relocalizations > 0) first = static_cast<int>(tracker.stats().images_fused);
+      if (first < 0 && tracker.stats().relocalizations > 0)
+        first = static_cast<int>(tracker.stats().images_fused);
     });
     SCOPED_TRACE("relocate_images " + std::to_string(relocate_images));
-    EXPECT_EQ(tracker.stats().relocalizations, relocate_images == 0 ? 0 : 1);  // once found, not lost again
-    EXPECT_EQ(tracker.stats().images_tags_elsewhere, relocate_images == 0 ? 0 : 1);  // the image before it
+    EXPECT_EQ(tracker.stats().relocalizations,
+              relocate_images == 0 ? 0 : 1);  // once found, not lost again
+    EXPECT_EQ(tracker.stats().images_tags_elsewhere,
+              relocate_images == 0 ? 0 : 1);  // the image before it
     if (relocate_images > 0) {
       EXPECT_EQ(first, relocate_images);  // the first images in which the tags disagree
       EXPECT_GT(relocalized, 0.02);
@@ -225,7 +258,8 @@ TEST(Tracker, TagsSeenWhereTheEstimateCannotBeMoveTheEstimateThere) {
       const double position = (tracker.T_PO().translation() - truth.translation()).norm();
       const double orientation = RotationDistance(tracker.T_PO().linear(), truth.linear());
       EXPECT_LT(position, (reference->T_PO().translation() - truth.translation()).norm() + 0.002);
-      EXPECT_LT(orientation, RotationDistance(reference->T_PO().linear(), truth.linear()) + 1.0 * M_PI / 180);
+      EXPECT_LT(orientation,
+                RotationDistance(reference->T_PO().linear(), truth.linear()) + 1.0 * M_PI / 180);
       EXPECT_LT(position, 0.012);
       EXPECT_LT(orientation, 4.0 * M_PI / 180);
       auto late = std::make_unique<Tracker>(r.models.hand, r.models.object, Set("jta"), params);
@@ -259,7 +293,8 @@ TEST(Tracker, ASnapshotContinuesBitIdentically) {
     Tracker tracker(r.models.hand, r.models.object, Set(set), TrackerParams());
     tracker.Start(r.session.t(0), start, sigmas);
     std::vector<Transform> run;
-    std::vector<std::pair<int, TrackerSnapshot>> snapshots = {{-1, tracker.Save()}};  // after sample k
+    std::vector<std::pair<int, TrackerSnapshot>> snapshots = {
+        {-1, tracker.Save()}};  // after sample k
     long fused = 0;
     Feed(r, tracker, n, 0.0, [&](int k) {
       run.push_back(tracker.T_PO());
@@ -270,7 +305,8 @@ TEST(Tracker, ASnapshotContinuesBitIdentically) {
     const VisualMemory end = tracker.visual_memory();
     EXPECT_EQ(tracker.stats().relocalizations, 1);
     ASSERT_FALSE(snapshots[0].second.memory.features_matched_well);
-    const auto differs = std::find_if(snapshots.begin() + 1, snapshots.end(), [&](const auto& s) { return !(s.second.memory == end); });
+    const auto differs = std::find_if(snapshots.begin() + 1, snapshots.end(),
+                                      [&](const auto& s) { return !(s.second.memory == end); });
     ASSERT_NE(differs, snapshots.end());
     if (set == "jta") {
       EXPECT_EQ(differs->second.memory.tag_disagreements, 1);
@@ -281,8 +317,12 @@ TEST(Tracker, ASnapshotContinuesBitIdentically) {
       tracker.Restore(snapshot->second);
       EXPECT_EQ(tracker.visual_memory(), snapshot->second.memory);
       int different = 0;
-      Feed(r, tracker, n, 0.0, [&](int k) { different += tracker.T_PO().matrix() != run[static_cast<std::size_t>(k)].matrix(); }, 1,
-           snapshot->first + 1);
+      Feed(
+          r, tracker, n, 0.0,
+          [&](int k) {
+            different += tracker.T_PO().matrix() != run[static_cast<std::size_t>(k)].matrix();
+          },
+          1, snapshot->first + 1);
       SCOPED_TRACE("from sample " + std::to_string(snapshot->first));
       EXPECT_EQ(different, 0);
       EXPECT_EQ(tracker.covariance(), P);
@@ -305,7 +345,8 @@ TEST(History, KeepsTheNewestSamplesAndFindsWhereAnImageGoes) {
   EXPECT_DOUBLE_EQ(h.At(3).t, 0.4);
   EXPECT_EQ(h.LastAtOrBefore(0.35), 2);
   EXPECT_EQ(h.LastAtOrBefore(1.0), 3);
-  EXPECT_EQ(h.LastAtOrBefore(h.At(2).t - 0.5 * tracker_detail::kTimeTolerance), 2);  // within the tolerance
+  EXPECT_EQ(h.LastAtOrBefore(h.At(2).t - 0.5 * tracker_detail::kTimeTolerance),
+            2);  // within the tolerance
   EXPECT_EQ(h.LastAtOrBefore(h.At(2).t - 2.0 * tracker_detail::kTimeTolerance), 1);
   EXPECT_LT(h.LastAtOrBefore(0.15), h.first());  // before everything held: too late to fuse
   std::vector<TrackedSample> local;
@@ -340,7 +381,8 @@ TEST(TagCorners, TheFitOfTheCornersIsThePoseThatProjectedThem) {
   const auto pixels = [&](const Vec3& p, const Mat3& R, const std::vector<VisualFeature>& corners) {
     Eigen::VectorXd out(2 * corners.size());
     for (std::size_t i = 0; i < corners.size(); ++i)
-      out.segment<2>(2 * static_cast<long>(i)) = K.Project(T_PC.inverse() * (p + R * corners[i].x_O));
+      out.segment<2>(2 * static_cast<long>(i)) =
+          K.Project(T_PC.inverse() * (p + R * corners[i].x_O));
     return out;
   };
   const double sigma = 4.0;
@@ -350,7 +392,8 @@ TEST(TagCorners, TheFitOfTheCornersIsThePoseThatProjectedThem) {
     for (std::size_t t = 0; t < count; ++t) {
       const auto c = object.tags[t].CornersO();
       for (int i = 0; i < 4; ++i)
-        corners.push_back({object.tags[t].id * 4 + i, c[static_cast<std::size_t>(i)], K.Project(T_PC.inverse() * (truth * c[static_cast<std::size_t>(i)]))});
+        corners.push_back({object.tags[t].id * 4 + i, c[static_cast<std::size_t>(i)],
+                           K.Project(T_PC.inverse() * (truth * c[static_cast<std::size_t>(i)]))});
     }
     std::vector<tracker_detail::TagCorners::PoseFit> fits;
     tags.FitPoses(corners, T_PC, K, guess, sigma, fits);
@@ -364,7 +407,10 @@ TEST(TagCorners, TheFitOfTheCornersIsThePoseThatProjectedThem) {
     for (int k = 0; k < 6; ++k) {
       Vec6 d = Vec6::Zero();
       d[k] = h;
-      const auto at = [&](const Vec6& e) { return pixels(truth.translation() + e.head<3>(), ExpSO3(e.tail<3>()) * truth.linear(), corners); };
+      const auto at = [&](const Vec6& e) {
+        return pixels(truth.translation() + e.head<3>(), ExpSO3(e.tail<3>()) * truth.linear(),
+                      corners);
+      };
       H.col(k) = (at(d) - at(-d)) / (2 * h);
     }
     const Mat6 expected = (H.transpose() * H).inverse() * sigma * sigma;
@@ -374,7 +420,8 @@ TEST(TagCorners, TheFitOfTheCornersIsThePoseThatProjectedThem) {
   tags.FitPoses({}, T_PC, K, guess, sigma, fits);
   EXPECT_TRUE(fits.empty());
   const auto c = object.tags[0].CornersO();
-  tags.FitPoses({{0, c[0], Vec2(300, 200)}, {1, c[1], Vec2(320, 200)}, {2, c[2], Vec2(320, 220)}}, T_PC, K, guess, sigma, fits);
+  tags.FitPoses({{0, c[0], Vec2(300, 200)}, {1, c[1], Vec2(320, 200)}, {2, c[2], Vec2(320, 220)}},
+                T_PC, K, guess, sigma, fits);
   EXPECT_TRUE(fits.empty());
 }
 
@@ -409,13 +456,15 @@ TEST(Tracker, SetsWithTorquesUndeflectTheJointsOfAnElasticHand) {
     for (std::stringstream ss(line); std::getline(ss, line, ',');) row.push_back(std::stod(line));
     Eigen::VectorXd q(16);
     for (std::size_t j = 0; j < 16; ++j)
-      q[static_cast<long>(j)] = row[static_cast<std::size_t>(std::find(header.begin(), header.end(), names[j]) - header.begin())];
+      q[static_cast<long>(j)] = row[static_cast<std::size_t>(
+          std::find(header.begin(), header.end(), names[j]) - header.begin())];
     truth.push_back(q);
   }
   ASSERT_EQ(static_cast<int>(truth.size()), s.num_samples());
 
   models.hand.joint_stiffness[5] = 0.0;  // middle_flex1: rigid
-  Tracker jt(models.hand, models.object, Set("jt"), TrackerParams()), j(models.hand, models.object, Set("j"), TrackerParams());
+  Tracker jt(models.hand, models.object, Set("jt"), TrackerParams()),
+      j(models.hand, models.object, Set("j"), TrackerParams());
   for (Tracker* t : {&jt, &j}) t->Start(s.t(0), s.info().initial_T_PO, {});
   double undeflected = 0.0, deflected = 0.0;
   Eigen::VectorXd q(16), tau(16);
@@ -464,7 +513,10 @@ TEST(Tracker, ImagesBeyondTheHorizonAreDroppedAndCounted) {
   auto tracker = Make(r, "jta", options);
   tracker->AddImage(r.session.t(0) - 0.5, r.images[0], frames[0].T_PC, K);  // before the start
   int k = 0;
-  while (r.session.t(k) < frames[1].t + 0.2) tracker->AddJointSample(r.session.t(k), r.q[static_cast<std::size_t>(k)], r.tau[static_cast<std::size_t>(k)]), ++k;
+  while (r.session.t(k) < frames[1].t + 0.2)
+    tracker->AddJointSample(r.session.t(k), r.q[static_cast<std::size_t>(k)],
+                            r.tau[static_cast<std::size_t>(k)]),
+        ++k;
   tracker->AddImage(frames[1].t, r.images[1], frames[1].T_PC, K);  // 200 ms late: beyond 50 ms
   tracker->AddImage(frames[1].t + 0.17, r.images[1], frames[1].T_PC, K);  // 30 ms late: fused
   const double future = r.session.t(k + 10);
@@ -474,7 +526,9 @@ TEST(Tracker, ImagesBeyondTheHorizonAreDroppedAndCounted) {
   EXPECT_EQ(stats.images_dropped_late, 2);
   EXPECT_EQ(stats.images_fused, 1);
   EXPECT_EQ(stats.rewinds, 1);
-  for (int j = 0; j < 12; ++j, ++k) tracker->AddJointSample(r.session.t(k), r.q[static_cast<std::size_t>(k)], r.tau[static_cast<std::size_t>(k)]);
+  for (int j = 0; j < 12; ++j, ++k)
+    tracker->AddJointSample(r.session.t(k), r.q[static_cast<std::size_t>(k)],
+                            r.tau[static_cast<std::size_t>(k)]);
   stats = tracker->stats();
   EXPECT_EQ(stats.images_fused, 2);
   EXPECT_EQ(stats.rewinds, 1);  // fused after the sample at its capture time, before the next one
@@ -499,7 +553,8 @@ TEST(TrackerParams, JsonRoundTripAndErrorsNameTheField) {
   EXPECT_EQ(back.features.search_radius, 25);
   EXPECT_EQ(TrackerParamsToJson(back), TrackerParamsToJson(p));
   // The filter-only files written before the tracker still read.
-  EXPECT_EQ(TrackerParamsFromJson(R"({"contact_sigma": 0.01})", "old.json").filter.contact_sigma, 0.01);
+  EXPECT_EQ(TrackerParamsFromJson(R"({"contact_sigma": 0.01})", "old.json").filter.contact_sigma,
+            0.01);
   const auto message = [](const std::string& text) {
     try {
       TrackerParamsFromJson(text, "p.json");
@@ -508,19 +563,32 @@ TEST(TrackerParams, JsonRoundTripAndErrorsNameTheField) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(message(R"({"tags": {"decimat": 2}})").find("p.json (tags): unknown parameter 'decimat'"), std::string::npos);
-  EXPECT_NE(message(R"({"features": {"search_radius": 0}})").find("p.json: feature parameter 'search_radius'"), std::string::npos);
-  EXPECT_NE(message(R"({"features": {"seed": -1}})").find("'seed' is -1, out of range"), std::string::npos);
-  EXPECT_NE(message(R"({"tags": {"family": "tag99"}})").find("p.json: tag detector parameter 'family'"), std::string::npos);
-  EXPECT_NE(message(R"({"contact_sigma": -1})").find("p.json: parameter 'contact_sigma' is -1"), std::string::npos);
-  for (const char* bad : {R"({"tags": {"relocate_images": -1}})", R"({"tags": {"relocate_images": 1.5}})", R"({"tags": {"relocate_images": "2"}})"})
-    EXPECT_NE(message(bad).find("p.json: parameter 'tags.relocate_images' is"), std::string::npos) << bad << ": " << message(bad);
+  EXPECT_NE(
+      message(R"({"tags": {"decimat": 2}})").find("p.json (tags): unknown parameter 'decimat'"),
+      std::string::npos);
+  EXPECT_NE(message(R"({"features": {"search_radius": 0}})")
+                .find("p.json: feature parameter 'search_radius'"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"features": {"seed": -1}})").find("'seed' is -1, out of range"),
+            std::string::npos);
+  EXPECT_NE(
+      message(R"({"tags": {"family": "tag99"}})").find("p.json: tag detector parameter 'family'"),
+      std::string::npos);
+  EXPECT_NE(message(R"({"contact_sigma": -1})").find("p.json: parameter 'contact_sigma' is -1"),
+            std::string::npos);
+  for (const char* bad :
+       {R"({"tags": {"relocate_images": -1}})", R"({"tags": {"relocate_images": 1.5}})",
+        R"({"tags": {"relocate_images": "2"}})"})
+    EXPECT_NE(message(bad).find("p.json: parameter 'tags.relocate_images' is"), std::string::npos)
+        << bad << ": " << message(bad);
   p.tag_relocate_images = -2;
   try {
     p.Validate("v.json");
     ADD_FAILURE() << "a negative tags.relocate_images was accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("v.json: parameter 'tags.relocate_images' is -2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("v.json: parameter 'tags.relocate_images' is -2"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -7,25 +7,31 @@
 
 namespace inhand::tracker_detail {
 
-ExtractedFeatures::ExtractedFeatures(const HandModel& hand, const ObjectModel& object, const FeatureParams& params)
-    : hand_(hand), object_(object), params_(params), centre_O_(object.Bounds().Center()),
+ExtractedFeatures::ExtractedFeatures(const HandModel& hand, const ObjectModel& object,
+                                     const FeatureParams& params)
+    : hand_(hand),
+      object_(object),
+      params_(params),
+      centre_O_(object.Bounds().Center()),
       radius_(0.5 * object.Bounds().Size().norm()) {
   params_.Validate();
 }
 
 ExtractedFeatures::~ExtractedFeatures() = default;
 
-void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& f,
-                                VisualStep& step, VisualUpdate& update) {
+void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+                                const Filter& f, VisualStep& step, VisualUpdate& update) {
   std::vector<VisualFeature>& out = update.features;
   if (!renderer_) {
     renderer_ = std::make_unique<Renderer>();
     hand_meshes_ = UploadHand(*renderer_, hand_);
-    object_meshes_ = UploadObject(*renderer_, object_, PrintedTagMeshes(object_));  // its appearance
+    object_meshes_ =
+        UploadObject(*renderer_, object_, PrintedTagMeshes(object_));  // its appearance
   }
   step.has_features = true;
   // The virtual image: the scene as this filter believes it (hand at its biased joints).
-  renderer_->Render(CameraScene(hand_meshes_, f.kinematics().link_poses(), object_meshes_, f.T_PO(), T_PC, K, Vec3(0.5, 0.5, 0.5)),
+  renderer_->Render(CameraScene(hand_meshes_, f.kinematics().link_poses(), object_meshes_, f.T_PO(),
+                                T_PC, K, Vec3(0.5, 0.5, 0.5)),
                     step.virtual_view, true);
   const std::vector<std::uint16_t>& label = step.virtual_view.label;
   object_mask_.resize(label.size());
@@ -51,11 +57,14 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     if (X_C.z() > 1e-3) {
       const Eigen::Matrix<double, 2, 3> J = K.ProjectJacobian(X_C) * T_PC.linear().transpose();
       const Eigen::Matrix2d S = J * P.topLeftCorner<3, 3>() * J.transpose();
-      const double sigma_theta2 = Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(3, 3)).eigenvalues().maxCoeff();
+      const double sigma_theta2 =
+          Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(3, 3)).eigenvalues().maxCoeff();
       const double r_px = radius_ * K.fx / X_C.z();
-      const double sigma2 = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvalues().maxCoeff() + r_px * r_px * sigma_theta2;
-      radius = std::clamp(static_cast<int>(std::ceil(3.0 * std::sqrt(std::max(sigma2, 0.0)))), params_.search_radius,
-                          params_.max_search_radius);
+      const double sigma2 =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvalues().maxCoeff() +
+          r_px * r_px * sigma_theta2;
+      radius = std::clamp(static_cast<int>(std::ceil(3.0 * std::sqrt(std::max(sigma2, 0.0)))),
+                          params_.search_radius, params_.max_search_radius);
     }
   }
   if (radius > params_.search_radius && (!matched_well_ || radius >= 2 * params_.search_radius))
@@ -66,7 +75,8 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
                                // not 15, and was no more accurate overall
   step.search_radius = radius;
   step.relocalized = 0.0;
-  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false);  // no debug-only camera corners
+  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_,
+                             false);  // no debug-only camera corners
   Inliers(step.match, T_PC, K, f, step.virtual_view, step.used_match, out);
   const bool well = static_cast<int>(out.size()) >= kWellMatched;
 
@@ -83,7 +93,8 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   if (matched_well_ && poor_frames_ >= kLostFrames && poor_frames_ % kLostFrames == 0) {
     FeatureParams global = params_;
     global.global_search_radius = params_.max_search_radius;
-    MatchResult again = MatchFeatures(image, step.virtual_view.colour, &object_mask_, global, &hand_mask_, false);
+    MatchResult again =
+        MatchFeatures(image, step.virtual_view.colour, &object_mask_, global, &hand_mask_, false);
     const MatchDebug& d = again.debug;
     if (d.global_cost < 0.5 * d.global_cost_unshifted && X_C.z() > 1e-3) {
       std::vector<int> used;
@@ -103,7 +114,8 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   Residuals(f, update, step.residual_before);
 }
 
-void ExtractedFeatures::Fused(const Filter& f, const VisualUpdate& update, int used, VisualStep& step) {
+void ExtractedFeatures::Fused(const Filter& f, const VisualUpdate& update, int used,
+                              VisualStep& step) {
   poor_frames_ = used >= kWellMatched ? 0 : poor_frames_ + 1;
   Residuals(f, update, step.residual_after);
 }
@@ -118,24 +130,30 @@ void ExtractedFeatures::Recall(const VisualMemory& memory) {
   poor_frames_ = memory.features_poor_frames;
 }
 
-void ExtractedFeatures::Residuals(const Filter& f, const VisualUpdate& update, std::vector<double>& out) {
+void ExtractedFeatures::Residuals(const Filter& f, const VisualUpdate& update,
+                                  std::vector<double>& out) {
   const Transform T_CP = update.T_PC.inverse();
   const Transform T_PO = f.T_PO();
   out.clear();
-  for (const VisualFeature& v : update.features) out.push_back((update.K.Project(T_CP * (T_PO * v.x_O)) - v.pixel).norm());
+  for (const VisualFeature& v : update.features)
+    out.push_back((update.K.Project(T_CP * (T_PO * v.x_O)) - v.pixel).norm());
 }
 
 // Inliers to object points through the virtual depth, moved into O with the estimate.
-void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
-                                const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const {
+void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC,
+                                const Intrinsics& K, const Filter& f, const RenderOutput& view,
+                                std::vector<int>& used, std::vector<VisualFeature>& out) const {
   const Transform T_OP = f.T_PO().inverse();
   out.clear();
   used.clear();
   for (std::size_t m = 0; m < match.matches.size(); ++m) {
     const FeatureMatch& fm = match.matches[m];
     if (!fm.inlier) continue;
-    const int x = static_cast<int>(std::lround(fm.virtual_px.x())), y = static_cast<int>(std::lround(fm.virtual_px.y()));
-    if (x < 0 || y < 0 || x >= K.width || y >= K.height || !object_mask_[std::size_t(y) * K.width + x]) continue;
+    const int x = static_cast<int>(std::lround(fm.virtual_px.x())),
+              y = static_cast<int>(std::lround(fm.virtual_px.y()));
+    if (x < 0 || y < 0 || x >= K.width || y >= K.height ||
+        !object_mask_[std::size_t(y) * K.width + x])
+      continue;
     const float z = view.depth_at(x, y);
     if (!std::isfinite(z)) continue;
     const Vec3 X_P = T_PC * K.Unproject(fm.virtual_px, z);
@@ -143,7 +161,8 @@ void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC,
     if (object_.field && OnOutline(view, x, y)) {
       // The match measured how far the corner moved from the virtual one: that displacement
       // stays the measurement, the grazing point's pixel its origin.
-      const Vec3 g = GrazingPoint(*object_.field, feature.x_O, T_OP * T_PC.translation(), kOutlinePixels * z / K.fx);
+      const Vec3 g = GrazingPoint(*object_.field, feature.x_O, T_OP * T_PC.translation(),
+                                  kOutlinePixels * z / K.fx);
       const Vec3 g_C = T_PC.inverse() * (f.T_PO() * g);
       if (g_C.z() > 1e-6) {
         feature.pixel += K.Project(g_C) - K.Project(T_PC.inverse() * X_P);
@@ -168,7 +187,8 @@ bool ExtractedFeatures::OnOutline(const RenderOutput& view, int x, int y) {
   for (int dy = -kOutlinePixels; dy <= kOutlinePixels; ++dy)
     for (int dx = -kOutlinePixels; dx <= kOutlinePixels; ++dx) {
       const int u = x + dx, v = y + dy;
-      if (u >= 0 && v >= 0 && u < view.width && v < view.height && view.label_at(u, v) == 0) return true;
+      if (u >= 0 && v >= 0 && u < view.width && v < view.height && view.label_at(u, v) == 0)
+        return true;
     }
   return false;
 }

@@ -21,8 +21,8 @@ class ExtractedFeatures final : public VisualSource {
   // Fills step.virtual_view, step.match, step.used_match, step.relocalized (also the update's
   // widening: the object found again that far away) and step.residual_before, and the update's
   // features.
-  void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
-               VisualStep& step, VisualUpdate& update) override;
+  void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+               const Filter& filter, VisualStep& step, VisualUpdate& update) override;
   // Counts a poorly matched frame (fewer than kWellMatched fused); step.residual_after.
   void Fused(const Filter& filter, const VisualUpdate& update, int used, VisualStep& step) override;
   void Remember(VisualMemory& memory) const override;
@@ -41,16 +41,18 @@ class ExtractedFeatures final : public VisualSource {
   // The inliers of `match` that lie on the object in `view`, as features (object point through
   // the virtual depth, measured pixel undistorted; on the outline, OnOutline, the point where
   // the line of sight grazes the surface), with their indices into match.matches.
-  void Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K, const Filter& f,
-               const RenderOutput& view, std::vector<int>& used, std::vector<VisualFeature>& out) const;
+  void Inliers(const MatchResult& match, const Transform& T_PC, const Intrinsics& K,
+               const Filter& f, const RenderOutput& view, std::vector<int>& used,
+               std::vector<VisualFeature>& out) const;
   static bool OnOutline(const RenderOutput& view, int x, int y);
   // [px] each feature's distance from where the filter's pose puts its point.
   static void Residuals(const Filter& f, const VisualUpdate& update, std::vector<double>& out);
-  static constexpr int kOutlinePixels = 2;  // a corner this close to the background is on the outline
+  static constexpr int kOutlinePixels =
+      2;  // a corner this close to the background is on the outline
   static constexpr int kWellMatched = VisualMemory::kWellMatched;  // inliers on the object that
                                                                    // end the wide first search
   static constexpr int kLostFrames = VisualMemory::kLostFrames;    // frames in a row that fused
-                                                                   // fewer: lost, searched for again
+                                                                 // fewer: lost, searched for again
   bool matched_well_ = false;
   int poor_frames_ = 0;  // frames in a row that fused fewer than kWellMatched features
 };

@@ -21,7 +21,8 @@ void History::Preallocate(int num_q, const FilterState& state) {
 
 TrackedSample& History::Push() {
   const long k = ++last_;
-  if (k - first_ >= static_cast<long>(ring_.size())) first_ = k - static_cast<long>(ring_.size()) + 1;
+  if (k - first_ >= static_cast<long>(ring_.size()))
+    first_ = k - static_cast<long>(ring_.size()) + 1;
   return At(k);
 }
 
@@ -32,7 +33,8 @@ long History::LastAtOrBefore(double t_c) const {
 }
 
 void History::CopyOut(long a, long from, long to, std::vector<TrackedSample>& local) const {
-  if (local.size() < static_cast<std::size_t>(to - a + 1)) local.resize(static_cast<std::size_t>(to - a + 1));
+  if (local.size() < static_cast<std::size_t>(to - a + 1))
+    local.resize(static_cast<std::size_t>(to - a + 1));
   for (long k = from; k <= to; ++k) local[static_cast<std::size_t>(k - a)] = At(k);
 }
 

@@ -25,8 +25,12 @@ class History {
   // Sample numbers held: [first(), last()]; last() < first() when empty.
   long first() const { return first_; }
   long last() const { return last_; }
-  TrackedSample& At(long k) { return ring_[static_cast<std::size_t>(k % static_cast<long>(ring_.size()))]; }
-  const TrackedSample& At(long k) const { return ring_[static_cast<std::size_t>(k % static_cast<long>(ring_.size()))]; }
+  TrackedSample& At(long k) {
+    return ring_[static_cast<std::size_t>(k % static_cast<long>(ring_.size()))];
+  }
+  const TrackedSample& At(long k) const {
+    return ring_[static_cast<std::size_t>(k % static_cast<long>(ring_.size()))];
+  }
 
   // A new newest sample (the oldest is forgotten when the ring is full); its slot, to fill.
   TrackedSample& Push();

@@ -8,8 +8,8 @@
 
 namespace inhand {
 
-VisualUpdate VisualUpdate::Features(double t_capture, const Transform& T_PC, const Intrinsics& K, double widen_position,
-                                    std::vector<VisualFeature> features) {
+VisualUpdate VisualUpdate::Features(double t_capture, const Transform& T_PC, const Intrinsics& K,
+                                    double widen_position, std::vector<VisualFeature> features) {
   VisualUpdate u;
   u.t_capture = t_capture;
   u.widen_position = widen_position;
@@ -19,7 +19,8 @@ VisualUpdate VisualUpdate::Features(double t_capture, const Transform& T_PC, con
   return u;
 }
 
-VisualUpdate VisualUpdate::Relocation(double t_capture, const Transform& T_PO, const Mat6& covariance, const Transform& T_PC,
+VisualUpdate VisualUpdate::Relocation(double t_capture, const Transform& T_PO,
+                                      const Mat6& covariance, const Transform& T_PC,
                                       const Intrinsics& K) {
   VisualUpdate u = Features(t_capture, T_PC, K);
   u.relocate = true;
@@ -37,8 +38,8 @@ FilterOptions FilterOptionsFor(const ObjectModel& object, const Modalities& m) {
   return options;
 }
 
-ImageFusion::ImageFusion(const HandModel& hand, const ObjectModel& object, const Modalities& m, const TrackerParams& params,
-                         Filter* shared) {
+ImageFusion::ImageFusion(const HandModel& hand, const ObjectModel& object, const Modalities& m,
+                         const TrackerParams& params, Filter* shared) {
   if (shared) {
     filter_ = shared;
   } else {
@@ -46,7 +47,8 @@ ImageFusion::ImageFusion(const HandModel& hand, const ObjectModel& object, const
     own_ = std::make_unique<Filter>(hand, *query_, params.filter, FilterOptionsFor(object, m));
     filter_ = own_.get();
   }
-  if (m.features) sources_.push_back(std::make_unique<ExtractedFeatures>(hand, object, params.features));
+  if (m.features)
+    sources_.push_back(std::make_unique<ExtractedFeatures>(hand, object, params.features));
   if (m.tags) sources_.push_back(std::make_unique<TagSource>(object, params));
 }
 
@@ -63,11 +65,13 @@ int ImageFusion::Apply(const VisualUpdate& u, double& m2) {
   step_.used += used;
   step_.offered += static_cast<int>(u.features.size());
   const auto& visual = f.trace().visual;
-  for (std::size_t i = visual.size() - u.features.size(); i < visual.size(); ++i) m2 += visual[i].mahalanobis;
+  for (std::size_t i = visual.size() - u.features.size(); i < visual.size(); ++i)
+    m2 += visual[i].mahalanobis;
   return used;
 }
 
-void ImageFusion::Fuse(double t_c, const Image8& image, const Transform& T_PC, const Intrinsics& K, long last) {
+void ImageFusion::Fuse(double t_c, const Image8& image, const Transform& T_PC, const Intrinsics& K,
+                       long last) {
   Filter& f = *filter_;
   const auto start = std::chrono::steady_clock::now();
   f.Restore(slots_[0].after_sample);
@@ -90,7 +94,8 @@ void ImageFusion::Fuse(double t_c, const Image8& image, const Transform& T_PC, c
   }
   step_.mean_mahalanobis = step_.offered > 0 ? m2 / step_.offered : 0.0;
   step_.t_capture = t_c;
-  step_.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  step_.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   here.insert(here.begin() + static_cast<long>(split), fresh_.begin(), fresh_.end());
   for (std::size_t i = split + fresh_.size(); i < here.size(); ++i) History::Apply(f, here[i]);
   Replay(1, last);

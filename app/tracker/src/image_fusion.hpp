@@ -22,8 +22,8 @@ class ImageFusion {
  public:
   // `shared`: the filter to work on (the caller's), or nullptr for one of its own (the worker's).
   // Throws InputError for a configuration the sources refuse (tags on an object without tags).
-  ImageFusion(const HandModel& hand, const ObjectModel& object, const Modalities& modalities, const TrackerParams& params,
-              Filter* shared);
+  ImageFusion(const HandModel& hand, const ObjectModel& object, const Modalities& modalities,
+              const TrackerParams& params, Filter* shared);
   ~ImageFusion();
 
   Filter& filter() { return *filter_; }

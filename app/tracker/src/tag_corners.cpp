@@ -11,7 +11,8 @@ namespace inhand::tracker_detail {
 
 TagCorners::TagCorners(const ObjectModel& object, const TrackerParams& params)
     : object_(object), fine_search_(params.tag_fine_search) {
-  if (object.tags.empty()) throw InputError(object.source + ": modality a needs AprilTags on the object, it has none");
+  if (object.tags.empty())
+    throw InputError(object.source + ": modality a needs AprilTags on the object, it has none");
   TagDetectorParams p = params.tags;
   if (params.tag_family_from_object) p.family = object.tags.front().family;
   coarse_ = std::make_unique<TagDetector>(p);
@@ -19,18 +20,21 @@ TagCorners::TagCorners(const ObjectModel& object, const TrackerParams& params)
   fine_ = std::make_unique<TagDetector>(p);
 }
 
-void TagCorners::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Transform& T_PO,
-                         std::vector<TagDetection>& tags, std::vector<VisualFeature>& out) {
+void TagCorners::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+                         const Transform& T_PO, std::vector<TagDetection>& tags,
+                         std::vector<VisualFeature>& out) {
   // Decimation loses tags under ~30 px wide, as a tag on an object in the hand often is.
   tags = coarse_->Detect(image);
   const Transform T_CO = T_PC.inverse() * T_PO;
   for (const TagPlacement& tag : object_.tags) {
     if (!fine_search_) break;
-    const bool found = std::any_of(tags.begin(), tags.end(),
-                                   [&](const TagDetection& d) { return d.id == tag.id && d.family == tag.family; });
+    const bool found = std::any_of(tags.begin(), tags.end(), [&](const TagDetection& d) {
+      return d.id == tag.id && d.family == tag.family;
+    });
     if (found || tag.family != fine_->params().family) continue;
     const Transform T_CT = T_CO * tag.T_OT;
-    if (T_CT.translation().z() <= 0.0 || T_CT.linear().col(2).dot(T_CT.translation()) >= 0.0) continue;  // behind, or seen from the back
+    if (T_CT.translation().z() <= 0.0 || T_CT.linear().col(2).dot(T_CT.translation()) >= 0.0)
+      continue;  // behind, or seen from the back
     Eigen::AlignedBox2d box;
     bool in_front = true;
     for (const Vec3& c : tag.CornersO()) {
@@ -41,8 +45,10 @@ void TagCorners::Measure(const Image8& image, const Transform& T_PC, const Intri
     if (!in_front) continue;
     // Widened by the tag's size (at least 40 px) for the estimate's error.
     const double margin = std::max(40.0, box.sizes().maxCoeff());
-    const PixelRect region{static_cast<int>(std::floor(box.min().x() - margin)), static_cast<int>(std::floor(box.min().y() - margin)),
-                           static_cast<int>(std::ceil(box.max().x() + margin)), static_cast<int>(std::ceil(box.max().y() + margin))};
+    const PixelRect region{static_cast<int>(std::floor(box.min().x() - margin)),
+                           static_cast<int>(std::floor(box.min().y() - margin)),
+                           static_cast<int>(std::ceil(box.max().x() + margin)),
+                           static_cast<int>(std::ceil(box.max().y() + margin))};
     for (const TagDetection& d : fine_->Detect(image, region))
       if (d.id == tag.id) tags.push_back(d);
   }
@@ -51,7 +57,8 @@ void TagCorners::Measure(const Image8& image, const Transform& T_PC, const Intri
     for (const TagPlacement& tag : object_.tags) {
       if (tag.id != d.id || tag.family != d.family) continue;
       const auto corners = tag.CornersO();
-      for (std::size_t c = 0; c < 4; ++c) out.push_back({d.id * 4 + static_cast<int>(c), corners[c], K.Undistort(d.corners[c])});
+      for (std::size_t c = 0; c < 4; ++c)
+        out.push_back({d.id * 4 + static_cast<int>(c), corners[c], K.Undistort(d.corners[c])});
     }
 }
 
@@ -59,8 +66,8 @@ namespace {
 
 // Gauss-Newton on the pose (δp, δθ in the palm frame, the filter's error state) over the corners'
 // pixels; the squared error at the end and HᵀH there.
-double RefinePose(const std::vector<VisualFeature>& corners, const Transform& T_PC, const Intrinsics& K, Vec3& p, Mat3& R,
-                  Mat6& HtH) {
+double RefinePose(const std::vector<VisualFeature>& corners, const Transform& T_PC,
+                  const Intrinsics& K, Vec3& p, Mat3& R, Mat6& HtH) {
   const Transform T_CP = T_PC.inverse();
   double cost = 0.0;
   for (int it = 0; it < 30; ++it) {
@@ -94,7 +101,8 @@ double RefinePose(const std::vector<VisualFeature>& corners, const Transform& T_
 
 // The tag's pose in the camera from the homography of its four corners (DLT on normalized image
 // coordinates), R = [r1 r2 r1×r2] made orthonormal.
-bool HomographyPose(const std::array<Vec2, 4>& plane, const std::array<Vec2, 4>& pixels, const Intrinsics& K, Transform& T_CT) {
+bool HomographyPose(const std::array<Vec2, 4>& plane, const std::array<Vec2, 4>& pixels,
+                    const Intrinsics& K, Transform& T_CT) {
   Eigen::Matrix<double, 8, 9> A;
   for (int i = 0; i < 4; ++i) {
     const double x = plane[i].x(), y = plane[i].y();
@@ -121,8 +129,9 @@ bool HomographyPose(const std::array<Vec2, 4>& plane, const std::array<Vec2, 4>&
 
 }  // namespace
 
-void TagCorners::FitPoses(const std::vector<VisualFeature>& corners, const Transform& T_PC, const Intrinsics& K,
-                          const Transform& T_PO_guess, double pixel_sigma, std::vector<PoseFit>& fits) const {
+void TagCorners::FitPoses(const std::vector<VisualFeature>& corners, const Transform& T_PC,
+                          const Intrinsics& K, const Transform& T_PO_guess, double pixel_sigma,
+                          std::vector<PoseFit>& fits) const {
   fits.clear();
   if (corners.size() < 4 || corners.size() % 4 != 0) return;
   struct Candidate {
@@ -145,9 +154,11 @@ void TagCorners::FitPoses(const std::vector<VisualFeature>& corners, const Trans
       if (t.id == id) tag = &t;
     if (tag == nullptr) continue;
     const double h = 0.5 * tag->size;
-    const std::array<Vec2, 4> plane = {Vec2(-h, -h), Vec2(h, -h), Vec2(h, h), Vec2(-h, h)};  // CornersO's order
+    const std::array<Vec2, 4> plane = {Vec2(-h, -h), Vec2(h, -h), Vec2(h, h),
+                                       Vec2(-h, h)};  // CornersO's order
     std::array<Vec2, 4> pixels;
-    for (int c = 0; c < 4; ++c) pixels[static_cast<std::size_t>(c)] = corners[first + static_cast<std::size_t>(c)].pixel;
+    for (int c = 0; c < 4; ++c)
+      pixels[static_cast<std::size_t>(c)] = corners[first + static_cast<std::size_t>(c)].pixel;
     Transform T_CT;
     if (!HomographyPose(plane, pixels, K, T_CT)) continue;
     // The other pose that nearly fits: the tag's normal mirrored about the line of sight.
@@ -155,19 +166,24 @@ void TagCorners::FitPoses(const std::vector<VisualFeature>& corners, const Trans
     const Vec3 mirrored = 2.0 * n.dot(v) * v - n;
     const Vec3 axis = n.cross(mirrored);
     Transform T_flip = T_CT;
-    if (axis.norm() > 1e-9) T_flip.linear() = ExpSO3(axis.normalized() * std::atan2(axis.norm(), n.dot(mirrored))) * T_CT.linear();
+    if (axis.norm() > 1e-9)
+      T_flip.linear() =
+          ExpSO3(axis.normalized() * std::atan2(axis.norm(), n.dot(mirrored))) * T_CT.linear();
     for (const Transform& T : {T_CT, T_flip}) refine(T_PC * T * tag->T_OT.inverse());
   }
-  std::sort(found.begin(), found.end(), [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  std::sort(found.begin(), found.end(),
+            [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   std::vector<const Candidate*> kept;
   for (const Candidate& c : found) {
     const bool seen = std::any_of(kept.begin(), kept.end(), [&](const Candidate* k) {
-      return (c.p - k->p).norm() <= 0.005 && LogSO3(c.R.transpose() * k->R).norm() <= 5.0 * M_PI / 180;
+      return (c.p - k->p).norm() <= 0.005 &&
+             LogSO3(c.R.transpose() * k->R).norm() <= 5.0 * M_PI / 180;
     });
     if (seen) continue;
     kept.push_back(&c);
     const Eigen::LDLT<Mat6> ldlt(c.HtH);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) continue;  // not determined by the corners
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0))
+      continue;  // not determined by the corners
     PoseFit fit;
     fit.T_PO = MakeTransform(c.p, c.R);
     const Mat6 cov = ldlt.solve(Mat6::Identity()) * (pixel_sigma * pixel_sigma);

@@ -19,8 +19,9 @@ class TagCorners {
   // Tags of the whole frame at the detector's decimation; then each of the object's tags that
   // the estimate puts in view, facing the camera, and that was not found, searched at full
   // resolution in its expected box. Their corners (undistorted) into `out`.
-  void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Transform& T_PO,
-               std::vector<TagDetection>& tags, std::vector<VisualFeature>& out);
+  void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+               const Transform& T_PO, std::vector<TagDetection>& tags,
+               std::vector<VisualFeature>& out);
 
   // The object's poses that fit the corners Measure gave (four per tag, in its order), on
   // their own: each tag's homography, its mirror image and `T_PO_guess` start a Gauss-Newton fit
@@ -33,8 +34,9 @@ class TagCorners {
     Mat6 covariance = Mat6::Identity();
     double cost = 0.0;  // [px²] sum of the corners' squared pixel errors at the fit
   };
-  void FitPoses(const std::vector<VisualFeature>& corners, const Transform& T_PC, const Intrinsics& K, const Transform& T_PO_guess,
-                double pixel_sigma, std::vector<PoseFit>& fits) const;
+  void FitPoses(const std::vector<VisualFeature>& corners, const Transform& T_PC,
+                const Intrinsics& K, const Transform& T_PO_guess, double pixel_sigma,
+                std::vector<PoseFit>& fits) const;
 
  private:
   const ObjectModel& object_;

@@ -6,10 +6,12 @@
 namespace inhand::tracker_detail {
 
 TagSource::TagSource(const ObjectModel& object, const TrackerParams& params)
-    : corners_(object, params), pixel_sigma_(params.filter.pixel_sigma), relocate_images_(params.tag_relocate_images) {}
+    : corners_(object, params),
+      pixel_sigma_(params.filter.pixel_sigma),
+      relocate_images_(params.tag_relocate_images) {}
 
-void TagSource::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& f, VisualStep& step,
-                        VisualUpdate& update) {
+void TagSource::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+                        const Filter& f, VisualStep& step, VisualUpdate& update) {
   corners_.Measure(image, T_PC, K, f.T_PO(), step.tags, update.features);
   TagCorners::PoseFit fit;
   const bool elsewhere = relocate_images_ > 0 && Elsewhere(f, update.features, T_PC, K, fit);
@@ -33,11 +35,12 @@ bool TagSource::Disagrees(const Filter& f, const TagCorners::PoseFit& fit) {
 // pixel σ) counts, and one that agrees with the estimate ends it. A small tag seen at an angle
 // fits two poses nearly alike: when neither is where the estimate is, the object is put at the
 // better one, its covariance widened by the other's difference (d dᵀ).
-bool TagSource::Elsewhere(const Filter& f, const std::vector<VisualFeature>& corners, const Transform& T_PC,
-                          const Intrinsics& K, TagCorners::PoseFit& where) {
+bool TagSource::Elsewhere(const Filter& f, const std::vector<VisualFeature>& corners,
+                          const Transform& T_PC, const Intrinsics& K, TagCorners::PoseFit& where) {
   const double sigma = pixel_sigma_;
   corners_.FitPoses(corners, T_PC, K, f.T_PO(), sigma, fits_);
-  if (fits_.empty() || fits_.front().cost > sigma * sigma * static_cast<double>(corners.size())) return false;
+  if (fits_.empty() || fits_.front().cost > sigma * sigma * static_cast<double>(corners.size()))
+    return false;
   where = fits_.front();
   for (const auto& fit : fits_) {
     if (fit.cost > fits_.front().cost + chi2::k2Dof99 * sigma * sigma) break;

@@ -15,8 +15,8 @@ class TagSource final : public VisualSource {
  public:
   TagSource(const ObjectModel& object, const TrackerParams& params);
   // Fills step.tags (and step.relocalized, the distance, when it relocates).
-  void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
-               VisualStep& step, VisualUpdate& update) override;
+  void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+               const Filter& filter, VisualStep& step, VisualUpdate& update) override;
   void Fused(const Filter&, const VisualUpdate&, int, VisualStep&) override {}
   void Remember(VisualMemory& memory) const override { memory.tag_disagreements = disagreements_; }
   void Recall(const VisualMemory& memory) override { disagreements_ = memory.tag_disagreements; }
@@ -24,8 +24,8 @@ class TagSource final : public VisualSource {
  private:
   // Whether the corners of this image put the object where the estimate cannot be; if so,
   // `where` is the best fit.
-  bool Elsewhere(const Filter& f, const std::vector<VisualFeature>& corners, const Transform& T_PC, const Intrinsics& K,
-                 TagCorners::PoseFit& where);
+  bool Elsewhere(const Filter& f, const std::vector<VisualFeature>& corners, const Transform& T_PC,
+                 const Intrinsics& K, TagCorners::PoseFit& where);
   // Whether a pose the tags fit is beyond what the estimate and the fit can both be off by.
   static bool Disagrees(const Filter& f, const TagCorners::PoseFit& fit);
 

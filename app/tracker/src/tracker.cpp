@@ -42,7 +42,8 @@ struct Job {
 }  // namespace
 
 struct Tracker::Impl {
-  Impl(const HandModel& h, const ObjectModel& o, const Modalities& m, const TrackerParams& p, const TrackerOptions& opt)
+  Impl(const HandModel& h, const ObjectModel& o, const Modalities& m, const TrackerParams& p,
+       const TrackerOptions& opt)
       : hand(h),
         object(o),
         modalities(m),
@@ -54,10 +55,12 @@ struct Tracker::Impl {
     ValidateJointStiffness(h);
     deflect = m.torque && HasElasticJoints(h);
     if (!(options.horizon >= 0.0) || options.history_samples < 1 || options.max_queued_images < 1)
-      throw InputError("tracker options: horizon must be >= 0 s, history_samples and max_queued_images >= 1");
+      throw InputError(
+          "tracker options: horizon must be >= 0 s, history_samples and max_queued_images >= 1");
     history.Resize(options.history_samples);
     // Configuration errors surface here, not on the worker.
-    fusion = std::make_unique<tracker_detail::ImageFusion>(h, o, m, params, options.threaded ? nullptr : &filter);
+    fusion = std::make_unique<tracker_detail::ImageFusion>(h, o, m, params,
+                                                           options.threaded ? nullptr : &filter);
     if (options.threaded) worker = std::thread([this] { WorkerLoop(); });
   }
 
@@ -76,11 +79,14 @@ struct Tracker::Impl {
   bool deflect = false;    // sets with torques on a hand with joint stiffness
 
   // --- the caller's side
-  void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& tau) {
+  void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& tau) {
     INHAND_CHECK(start_set, "Tracker::AddJointSample before Start");
-    INHAND_CHECK(q.size() == hand.num_q() && tau.size() == hand.num_q(), "joint sample size does not match the hand");
+    INHAND_CHECK(q.size() == hand.num_q() && tau.size() == hand.num_q(),
+                 "joint sample size does not match the hand");
     Adopt();
-    if (!std::isfinite(t) || (started && !(t > last_t)) || (!started && !(t >= start_t - kTimeTolerance))) {
+    if (!std::isfinite(t) || (started && !(t > last_t)) ||
+        (!started && !(t >= start_t - kTimeTolerance))) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.samples_dropped;
       return;
@@ -94,8 +100,10 @@ struct Tracker::Impl {
     while (!early.empty() && early.front().t_capture + kTimeTolerance < t) {
       Job job = std::move(early.front());
       early.pop_front();
-      if (started) Submit(std::move(job));
-      else DropLate();
+      if (started)
+        Submit(std::move(job));
+      else
+        DropLate();
     }
     if (q_used.size() != q.size()) q_used.resize(q.size());  // once
     q_used = q;
@@ -144,7 +152,8 @@ struct Tracker::Impl {
       if (t_c + kTimeTolerance < start_t) return DropLate();
       // Waits for the samples up to its capture time, in capture order.
       Job job{t_c, image, T_PC, K};
-      auto it = std::upper_bound(early.begin(), early.end(), t_c, [](double v, const Job& j) { return v < j.t_capture; });
+      auto it = std::upper_bound(early.begin(), early.end(), t_c,
+                                 [](double v, const Job& j) { return v < j.t_capture; });
       early.insert(it, std::move(job));
       return;
     }
@@ -307,7 +316,8 @@ struct Tracker::Impl {
   StartSigmas start_sigmas;
   std::deque<Job> early;  // images captured after the newest sample, in capture order
 
-  std::unique_ptr<tracker_detail::ImageFusion> fusion;  // used by one thread: the caller's, or the worker
+  std::unique_ptr<tracker_detail::ImageFusion>
+      fusion;  // used by one thread: the caller's, or the worker
 
   // Shared with the worker.
   std::mutex mutex;
@@ -325,15 +335,16 @@ struct Tracker::Impl {
   std::thread worker;
 };
 
-Tracker::Tracker(const HandModel& hand, const ObjectModel& object, const Modalities& modalities, const TrackerParams& params,
-                 const TrackerOptions& options)
+Tracker::Tracker(const HandModel& hand, const ObjectModel& object, const Modalities& modalities,
+                 const TrackerParams& params, const TrackerOptions& options)
     : impl_(std::make_unique<Impl>(hand, object, modalities, params, options)) {}
 
 Tracker::~Tracker() = default;
 
 void Tracker::Start(double t, const Transform& T_PO, const StartSigmas& sigmas) {
   sigmas.Validate("Tracker::Start");
-  if (!std::isfinite(t) || !T_PO.matrix().allFinite()) throw InputError("Tracker::Start: the time or the pose is not finite");
+  if (!std::isfinite(t) || !T_PO.matrix().allFinite())
+    throw InputError("Tracker::Start: the time or the pose is not finite");
   WaitForImages();
   Impl& m = *impl_;
   std::lock_guard<std::mutex> lock(m.mutex);
@@ -350,11 +361,13 @@ void Tracker::Start(double t, const Transform& T_PO, const StartSigmas& sigmas) 
   m.RecallLocked(VisualMemory(), 0);
 }
 
-void Tracker::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& tau) {
+void Tracker::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                             const Eigen::Ref<const Eigen::VectorXd>& tau) {
   impl_->AddJointSample(t, q, tau);
 }
 
-void Tracker::AddImage(double t_capture, const Image8& image, const Transform& T_PC, const Intrinsics& K) {
+void Tracker::AddImage(double t_capture, const Image8& image, const Transform& T_PC,
+                       const Intrinsics& K) {
   impl_->AddImage(t_capture, image, T_PC, K);
 }
 
@@ -382,8 +395,9 @@ TrackerStats Tracker::stats() const {
 }
 
 std::ostream& operator<<(std::ostream& os, const VisualMemory& m) {
-  return os << "{tag_disagreements " << m.tag_disagreements << ", features_matched_well " << m.features_matched_well
-            << ", features_poor_frames " << m.features_poor_frames << "}";
+  return os << "{tag_disagreements " << m.tag_disagreements << ", features_matched_well "
+            << m.features_matched_well << ", features_poor_frames " << m.features_poor_frames
+            << "}";
 }
 
 TrackerSnapshot Tracker::Save() const {

@@ -28,24 +28,36 @@ struct Field {
 
 const std::vector<Field<TagDetectorParams>>& TagFields() {
   using T = TagDetectorParams;
-  static const std::vector<Field<T>> fields = {
-      {"decimate", &T::decimate}, {"refine_edges", nullptr, nullptr, &T::refine_edges}, {"sigma", &T::sigma},
-      {"threads", nullptr, &T::threads}, {"max_hamming", nullptr, &T::max_hamming},
-      {"min_decision_margin", &T::min_decision_margin}};
+  static const std::vector<Field<T>> fields = {{"decimate", &T::decimate},
+                                               {"refine_edges", nullptr, nullptr, &T::refine_edges},
+                                               {"sigma", &T::sigma},
+                                               {"threads", nullptr, &T::threads},
+                                               {"max_hamming", nullptr, &T::max_hamming},
+                                               {"min_decision_margin", &T::min_decision_margin}};
   return fields;
 }
 
 const std::vector<Field<FeatureParams>>& FeatureFields() {
   using F = FeatureParams;
   static const std::vector<Field<F>> fields = {
-      {"canny_low", &F::canny_low}, {"canny_high", &F::canny_high}, {"blur_sigma", &F::blur_sigma},
-      {"harris_block", nullptr, &F::harris_block}, {"harris_k", &F::harris_k}, {"harris_relative", &F::harris_relative},
-      {"max_corners", nullptr, &F::max_corners}, {"min_corner_distance", &F::min_corner_distance},
-      {"occluder_clearance", nullptr, &F::occluder_clearance}, {"piece_radius", nullptr, &F::piece_radius},
-      {"min_piece_pixels", nullptr, &F::min_piece_pixels}, {"search_radius", nullptr, &F::search_radius},
-      {"max_search_radius", nullptr, &F::max_search_radius}, {"global_truncation", &F::global_truncation},
-      {"orientation_bins", nullptr, &F::orientation_bins}, {"min_vote_fraction", &F::min_vote_fraction},
-      {"ransac_threshold", &F::ransac_threshold}, {"ransac_iterations", nullptr, &F::ransac_iterations},
+      {"canny_low", &F::canny_low},
+      {"canny_high", &F::canny_high},
+      {"blur_sigma", &F::blur_sigma},
+      {"harris_block", nullptr, &F::harris_block},
+      {"harris_k", &F::harris_k},
+      {"harris_relative", &F::harris_relative},
+      {"max_corners", nullptr, &F::max_corners},
+      {"min_corner_distance", &F::min_corner_distance},
+      {"occluder_clearance", nullptr, &F::occluder_clearance},
+      {"piece_radius", nullptr, &F::piece_radius},
+      {"min_piece_pixels", nullptr, &F::min_piece_pixels},
+      {"search_radius", nullptr, &F::search_radius},
+      {"max_search_radius", nullptr, &F::max_search_radius},
+      {"global_truncation", &F::global_truncation},
+      {"orientation_bins", nullptr, &F::orientation_bins},
+      {"min_vote_fraction", &F::min_vote_fraction},
+      {"ransac_threshold", &F::ransac_threshold},
+      {"ransac_iterations", nullptr, &F::ransac_iterations},
       {"seed", nullptr, nullptr, nullptr, &F::seed}};
   return fields;
 }
@@ -80,8 +92,10 @@ void Read(const Json& j, const std::vector<Field<P>>& fields, const std::string&
       const long long value = v.get<long long>();
       if (value < (field->integer ? -2147483647LL : 0LL) || value > 2147483647LL)
         throw InputError(name + " is " + std::to_string(value) + ", out of range");
-      if (field->integer) p.*field->integer = static_cast<int>(value);
-      else p.*field->unsigned_integer = static_cast<unsigned>(value);
+      if (field->integer)
+        p.*field->integer = static_cast<int>(value);
+      else
+        p.*field->unsigned_integer = static_cast<unsigned>(value);
     } else {
       if (!v.is_number()) throw InputError(name + " must be a number");
       p.*field->number = v.get<double>();
@@ -104,10 +118,11 @@ void Prefixed(const std::string& source, F&& validate) {
 void TrackerParams::Validate(const std::string& source) const {
   filter.Validate(source);
   if (!(joint_limit_margin >= 0.0 && joint_limit_margin <= 100.0))
-    throw InputError(source + ": parameter 'joints.limit_margin' is " + std::to_string(joint_limit_margin) + ", expected in [0, 100]");
+    throw InputError(source + ": parameter 'joints.limit_margin' is " +
+                     std::to_string(joint_limit_margin) + ", expected in [0, 100]");
   if (!(tag_relocate_images >= 0 && tag_relocate_images <= 1000))
-    throw InputError(source + ": parameter 'tags.relocate_images' is " + std::to_string(tag_relocate_images) +
-                     ", expected in [0, 1000] (0: never)");
+    throw InputError(source + ": parameter 'tags.relocate_images' is " +
+                     std::to_string(tag_relocate_images) + ", expected in [0, 1000] (0: never)");
   Prefixed(source, [&] { tags.Validate(); });
   Prefixed(source, [&] { features.Validate(); });
 }
@@ -120,7 +135,8 @@ std::string TrackerParamsToJson(const TrackerParams& params) {
   tags["relocate_images"] = params.tag_relocate_images;
   j["tags"] = tags;
   j["features"] = Write(params.features, FeatureFields());
-  j["joints"] = {{"limit_margin", params.joint_limit_margin}, {"clamp_to_limits", params.joint_clamp_to_limits}};
+  j["joints"] = {{"limit_margin", params.joint_limit_margin},
+                 {"clamp_to_limits", params.joint_clamp_to_limits}};
   return j.dump(2);
 }
 
@@ -131,20 +147,23 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
   if (j.contains("tags")) {
     Json tags = j["tags"];
     if (tags.is_object() && tags.contains("family")) {
-      if (!tags["family"].is_string()) throw InputError(source + ": parameter 'tags.family' must be a string");
+      if (!tags["family"].is_string())
+        throw InputError(source + ": parameter 'tags.family' must be a string");
       p.tags.family = tags["family"].get<std::string>();
       p.tag_family_from_object = false;
       tags.erase("family");
     }
     if (tags.is_object() && tags.contains("fine_search")) {
-      if (!tags["fine_search"].is_boolean()) throw InputError(source + ": parameter 'tags.fine_search' must be true or false");
+      if (!tags["fine_search"].is_boolean())
+        throw InputError(source + ": parameter 'tags.fine_search' must be true or false");
       p.tag_fine_search = tags["fine_search"].get<bool>();
       tags.erase("fine_search");
     }
     if (tags.is_object() && tags.contains("relocate_images")) {
       const Json& v = tags["relocate_images"];
       if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 1000)
-        throw InputError(source + ": parameter 'tags.relocate_images' is " + v.dump() + ", expected an integer in [0, 1000] (0: never)");
+        throw InputError(source + ": parameter 'tags.relocate_images' is " + v.dump() +
+                         ", expected an integer in [0, 1000] (0: never)");
       p.tag_relocate_images = v.get<int>();
       tags.erase("relocate_images");
     }
@@ -160,12 +179,15 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
     if (!joints.is_object()) throw InputError(source + ": 'joints' must be an object");
     for (auto it = joints.begin(); it != joints.end(); ++it) {
       if (it.key() == "clamp_to_limits") {
-        if (!it.value().is_boolean()) throw InputError(source + ": parameter 'joints.clamp_to_limits' must be true or false");
+        if (!it.value().is_boolean())
+          throw InputError(source + ": parameter 'joints.clamp_to_limits' must be true or false");
         p.joint_clamp_to_limits = it.value().get<bool>();
         continue;
       }
-      if (it.key() != "limit_margin") throw InputError(source + " (joints): unknown parameter '" + it.key() + "'");
-      if (!it.value().is_number()) throw InputError(source + ": parameter 'joints.limit_margin' must be a number");
+      if (it.key() != "limit_margin")
+        throw InputError(source + " (joints): unknown parameter '" + it.key() + "'");
+      if (!it.value().is_number())
+        throw InputError(source + ": parameter 'joints.limit_margin' must be a number");
       p.joint_limit_margin = it.value().get<double>();
     }
     j.erase("joints");

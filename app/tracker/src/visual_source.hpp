@@ -16,10 +16,11 @@ class VisualSource {
   // Measures `image` against `filter` and fills `update` (its time and camera are set): the
   // features to fuse after widening the position by update.widen_position, or a relocation.
   // Writes what it saw into `step`.
-  virtual void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K, const Filter& filter,
-                       VisualStep& step, VisualUpdate& update) = 0;
+  virtual void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+                       const Filter& filter, VisualStep& step, VisualUpdate& update) = 0;
   // `update` was applied to `filter`, which fused `used` of its features.
-  virtual void Fused(const Filter& filter, const VisualUpdate& update, int used, VisualStep& step) = 0;
+  virtual void Fused(const Filter& filter, const VisualUpdate& update, int used,
+                     VisualStep& step) = 0;
   // What Measure carries from one image to the next, to save and to set back.
   virtual void Remember(VisualMemory& memory) const = 0;
   virtual void Recall(const VisualMemory& memory) = 0;

@@ -38,8 +38,9 @@ Vec3 FromBt(const btVector3& v) { return Vec3(v.x(), v.y(), v.z()); }
 
 btTransform ToBt(const Transform& T) {
   const Mat3& R = T.linear();
-  return btTransform(btMatrix3x3(R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)),
-                     ToBt(T.translation()));
+  return btTransform(
+      btMatrix3x3(R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)),
+      ToBt(T.translation()));
 }
 
 Shape MakeShape(const ConvexPiece& piece) {
@@ -56,7 +57,8 @@ Shape MakeShape(const ConvexPiece& piece) {
       s.T_BS = piece.T_BS;
       return s;
     case ConvexPiece::Kind::kCylinder: {
-      auto cyl = std::make_unique<btCylinderShapeZ>(btVector3(piece.radius, piece.radius, piece.half_length));
+      auto cyl = std::make_unique<btCylinderShapeZ>(
+          btVector3(piece.radius, piece.radius, piece.half_length));
       cyl->setMargin(kCylinderMargin);
       s.shape = std::move(cyl);
       s.T_BS = piece.T_BS;
@@ -83,9 +85,9 @@ Shape MakeShape(const ConvexPiece& piece) {
 // bounding sphere each so that the field's 1-Lipschitz bound skips most of them.
 struct FieldProbe {
   enum class Kind { kSphere, kSegment, kPoints } kind = Kind::kPoints;
-  double radius = 0.0;          // sphere / capsule radius
-  Vec3 a_B = Vec3::Zero();      // centre, or segment end
-  Vec3 b_B = Vec3::Zero();      // segment end
+  double radius = 0.0;           // sphere / capsule radius
+  Vec3 a_B = Vec3::Zero();       // centre, or segment end
+  Vec3 b_B = Vec3::Zero();       // segment end
   Vec3 center_B = Vec3::Zero();  // bounding sphere of the piece
   double bound = 0.0;
   struct Patch {
@@ -131,7 +133,8 @@ FieldProbe MakeProbe(const ConvexPiece& piece) {
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) {
         const Vec3 x = A + (B - A) * (double(i) / n) + (C - A) * (double(j) / n);
-        const std::array<long long, 3> key{std::llround(x.x() * 1e7), std::llround(x.y() * 1e7), std::llround(x.z() * 1e7)};
+        const std::array<long long, 3> key{std::llround(x.x() * 1e7), std::llround(x.y() * 1e7),
+                                           std::llround(x.z() * 1e7)};
         unique.emplace(key, x);
       }
   }
@@ -144,10 +147,14 @@ FieldProbe MakeProbe(const ConvexPiece& piece) {
   }
   // Clusters of patches (their points' bounding sphere), so that a far part of a palm costs one
   // bound instead of one per patch.
-  const auto floor_div = [](long long a, long long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
+  const auto floor_div = [](long long a, long long b) {
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+  };
   std::map<std::array<long long, 3>, std::vector<const std::vector<Vec3>*>> clusters;
   for (const auto& [cell, pts] : cells)
-    clusters[{floor_div(cell[0], kClusterCells), floor_div(cell[1], kClusterCells), floor_div(cell[2], kClusterCells)}].push_back(&pts);
+    clusters[{floor_div(cell[0], kClusterCells), floor_div(cell[1], kClusterCells),
+              floor_div(cell[2], kClusterCells)}]
+        .push_back(&pts);
   for (const auto& [key, members] : clusters) {
     FieldProbe::Patch cluster;
     cluster.first = static_cast<int>(p.patches.size());
@@ -174,7 +181,7 @@ FieldProbe MakeProbe(const ConvexPiece& piece) {
 
 struct BulletContactQuery::Impl {
   std::vector<std::pair<double, int>> patch_order;  // scratch: (lower bound, patch)
-  std::vector<std::vector<Shape>> link_shapes;  // per link, possibly empty
+  std::vector<std::vector<Shape>> link_shapes;      // per link, possibly empty
   std::vector<Shape> object_shapes;
   std::shared_ptr<const DistanceField> field;
   std::vector<std::vector<FieldProbe>> link_probes;  // per link, when `field` is set
@@ -210,7 +217,8 @@ struct BulletContactQuery::Impl {
   // fn(patch, lower bound) for every patch of a points probe whose lower bound on the field
   // (at its centre less its radius, 1-Lipschitz) is at most `threshold`; clusters first.
   template <class Fn>
-  void ForPatchesWithin(const FieldProbe& probe, const Transform& T_OL, double threshold, Fn&& fn) const {
+  void ForPatchesWithin(const FieldProbe& probe, const Transform& T_OL, double threshold,
+                        Fn&& fn) const {
     for (const FieldProbe::Patch& cluster : probe.clusters) {
       if (field->Distance(T_OL * cluster.center_B) - cluster.radius > threshold) continue;
       for (int c = cluster.first; c < cluster.first + cluster.count; ++c) {
@@ -255,7 +263,8 @@ struct BulletContactQuery::Impl {
           const int i0 = c * kCoarse, i1 = std::min(n, i0 + kCoarse);
           // Between samples i0 and i1 the field is at least the larger of the two cones.
           for (int i = i0 + 1; i < i1; ++i)
-            if (std::max(coarse[c] - (i - i0) * step, coarse[c + 1] - (i1 - i) * step) <= best) offer(at(i), i);
+            if (std::max(coarse[c] - (i - i0) * step, coarse[c + 1] - (i1 - i) * step) <= best)
+              offer(at(i), i);
         }
         double lo = std::max(0.0, (best_i - 1.0) / n), hi = std::min(1.0, (best_i + 1.0) / n);
         constexpr double kGolden = 0.6180339887498949;
@@ -281,7 +290,8 @@ struct BulletContactQuery::Impl {
         // distance). Ties go to the first point in the probe's order, as in a plain scan.
         std::vector<std::pair<double, int>>& order = patch_order;
         order.clear();
-        ForPatchesWithin(probe, T_OL, prune, [&](int c, double lower) { order.emplace_back(lower, c); });
+        ForPatchesWithin(probe, T_OL, prune,
+                         [&](int c, double lower) { order.emplace_back(lower, c); });
         stats.pairs_skipped += static_cast<long>(probe.patches.size() - order.size());
         std::sort(order.begin(), order.end());
         double best = std::numeric_limits<double>::infinity();
@@ -318,7 +328,8 @@ struct BulletContactQuery::Impl {
           continue;
         }
         Vec3 x;
-        const double d = FieldDistance(probe, T_OL, broad_phase ? prune : std::numeric_limits<double>::infinity(), x);
+        const double d = FieldDistance(
+            probe, T_OL, broad_phase ? prune : std::numeric_limits<double>::infinity(), x);
         if (d < best) {
           best = d;
           best_x = x;
@@ -403,13 +414,15 @@ BulletContactQuery::BulletContactQuery(const HandModel& hand, const ObjectModel&
     : impl_(std::make_unique<Impl>()) {
   impl_->link_shapes.resize(hand.links.size());
   for (std::size_t l = 0; l < hand.links.size(); ++l)
-    for (const ConvexPiece& p : hand.links[l].collision) impl_->link_shapes[l].push_back(MakeShape(p));
+    for (const ConvexPiece& p : hand.links[l].collision)
+      impl_->link_shapes[l].push_back(MakeShape(p));
   for (const ConvexPiece& p : object.pieces) impl_->object_shapes.push_back(MakeShape(p));
   if (object.field && !object.field->empty()) {
     impl_->field = object.field;
     impl_->link_probes.resize(hand.links.size());
     for (std::size_t l = 0; l < hand.links.size(); ++l)
-      for (const ConvexPiece& p : hand.links[l].collision) impl_->link_probes[l].push_back(MakeProbe(p));
+      for (const ConvexPiece& p : hand.links[l].collision)
+        impl_->link_probes[l].push_back(MakeProbe(p));
   }
 }
 

@@ -178,7 +178,8 @@ Grid MakeGrid(const Aabb& surface_box, const DistanceFieldParams& params) {
 // Ray parity along `axis` for every node: 1 where the line through the node (offset by a tiny
 // fixed amount so that it misses edges and vertices) crosses the surface an odd number of
 // times before reaching it.
-void ParityVotes(const std::vector<Tri>& tris, const Grid& g, int axis, std::vector<std::uint8_t>& votes) {
+void ParityVotes(const std::vector<Tri>& tris, const Grid& g, int axis,
+                 std::vector<std::uint8_t>& votes) {
   const int b = (axis + 1) % 3, c = (axis + 2) % 3;
   const double db = g.h * 3.1e-4, dc = g.h * 4.7e-4;
   const int nb = g.dims[b], nc = g.dims[c];
@@ -233,7 +234,8 @@ void ParityVotes(const std::vector<Tri>& tris, const Grid& g, int axis, std::vec
 // Unsigned distances at every node (threads over z slices; each node is computed on its own,
 // so the result does not depend on the thread count), then signed by `inside`.
 template <typename InsideFn>
-DistanceField Fill(const std::vector<Tri>& tris, const Grid& g, InsideFn&& inside, std::string source) {
+DistanceField Fill(const std::vector<Tri>& tris, const Grid& g, InsideFn&& inside,
+                   std::string source) {
   const TriangleBvh bvh(tris);
   DistanceField f;
   f.origin = g.origin;
@@ -241,7 +243,8 @@ DistanceField Fill(const std::vector<Tri>& tris, const Grid& g, InsideFn&& insid
   f.dims = g.dims;
   f.values.assign(static_cast<std::size_t>(g.size()), 0.0f);
   f.source = std::move(source);
-  const int threads = std::max(1, std::min(8, static_cast<int>(std::thread::hardware_concurrency())));
+  const int threads =
+      std::max(1, std::min(8, static_cast<int>(std::thread::hardware_concurrency())));
   auto work = [&](int t) {
     for (int k = t; k < g.dims[2]; k += threads) {
       for (int j = 0; j < g.dims[1]; ++j) {
@@ -304,12 +307,14 @@ double PieceSignedDistance(const ConvexPiece& piece, const Vec3& p) {
     case ConvexPiece::Kind::kHull: {
       const Planes planes = HullPlanes(piece);
       double inside = -std::numeric_limits<double>::infinity();
-      for (std::size_t i = 0; i < planes.n.size(); ++i) inside = std::max(inside, planes.n[i].dot(p) - planes.d[i]);
+      for (std::size_t i = 0; i < planes.n.size(); ++i)
+        inside = std::max(inside, planes.n[i].dot(p) - planes.d[i]);
       if (inside <= 0.0) return inside;
       double best = std::numeric_limits<double>::infinity();
       for (const auto& t : piece.hull_triangles)
-        best = std::min(best, PointTriangleDistance(p, piece.hull_vertices[t[0]], piece.hull_vertices[t[1]],
-                                                    piece.hull_vertices[t[2]]));
+        best = std::min(
+            best, PointTriangleDistance(p, piece.hull_vertices[t[0]], piece.hull_vertices[t[1]],
+                                        piece.hull_vertices[t[2]]));
       return best;
     }
   }
@@ -331,8 +336,9 @@ DistanceField BuildDistanceFieldFromMesh(const std::vector<const TriangleMesh*>&
   const Grid g = MakeGrid(box, params);
   std::vector<std::uint8_t> votes(static_cast<std::size_t>(g.size()), 0);
   for (int axis = 0; axis < 3; ++axis) ParityVotes(tris, g, axis, votes);
-  return Fill(tris, g, [&](std::size_t idx, const Vec3&) { return votes[idx] >= 2; },
-              "closed mesh of " + std::to_string(tris.size()) + " triangles");
+  return Fill(
+      tris, g, [&](std::size_t idx, const Vec3&) { return votes[idx] >= 2; },
+      "closed mesh of " + std::to_string(tris.size()) + " triangles");
 }
 
 DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& pieces,
@@ -345,7 +351,8 @@ DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& piece
   const Grid g = MakeGrid(box, params);
   // Primitives by their exact distance; hulls by their planes (cached).
   std::vector<Planes> planes;
-  for (const ConvexPiece& p : pieces) planes.push_back(p.kind == ConvexPiece::Kind::kHull ? HullPlanes(p) : Planes{});
+  for (const ConvexPiece& p : pieces)
+    planes.push_back(p.kind == ConvexPiece::Kind::kHull ? HullPlanes(p) : Planes{});
   auto inside_any = [&](const Vec3& x) {
     for (std::size_t i = 0; i < pieces.size(); ++i) {
       const ConvexPiece& p = pieces[i];
@@ -355,7 +362,8 @@ DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& piece
         continue;
       }
       bool in = true;
-      for (std::size_t f = 0; f < planes[i].n.size() && in; ++f) in = planes[i].n[f].dot(x) - planes[i].d[f] <= 0.0;
+      for (std::size_t f = 0; f < planes[i].n.size() && in; ++f)
+        in = planes[i].n[f].dot(x) - planes[i].d[f] <= 0.0;
       if (in) return true;
     }
     return false;
@@ -366,7 +374,8 @@ DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& piece
   std::vector<Tri> surface;
   std::vector<Tri> todo;
   for (const ConvexPiece& p : pieces) {
-    for (const auto& t : p.hull_triangles) todo.push_back({p.hull_vertices[t[0]], p.hull_vertices[t[1]], p.hull_vertices[t[2]]});
+    for (const auto& t : p.hull_triangles)
+      todo.push_back({p.hull_vertices[t[0]], p.hull_vertices[t[1]], p.hull_vertices[t[2]]});
     while (!todo.empty()) {
       const Tri t = todo.back();
       todo.pop_back();
@@ -387,24 +396,29 @@ DistanceField BuildDistanceFieldFromPieces(const std::vector<ConvexPiece>& piece
     }
   }
   INHAND_CHECK(!surface.empty(), "the union of the pieces has no surface");
-  return Fill(surface, g, [&](std::size_t, const Vec3& x) { return inside_any(x); },
-              "union of " + std::to_string(pieces.size()) + " pieces");
+  return Fill(
+      surface, g, [&](std::size_t, const Vec3& x) { return inside_any(x); },
+      "union of " + std::to_string(pieces.size()) + " pieces");
 }
 
 double DistanceField::Distance(const Vec3& p_O) const {
   // Grid coordinates, clamped into the grid; outside it, the distance to it is added (the
   // square root only then: inside is the common case).
-  const double ux = (p_O.x() - origin.x()) / spacing, uy = (p_O.y() - origin.y()) / spacing, uz = (p_O.z() - origin.z()) / spacing;
+  const double ux = (p_O.x() - origin.x()) / spacing, uy = (p_O.y() - origin.y()) / spacing,
+               uz = (p_O.z() - origin.z()) / spacing;
   const double cx = std::min(std::max(ux, 0.0), dims[0] - 1.0);
   const double cy = std::min(std::max(uy, 0.0), dims[1] - 1.0);
   const double cz = std::min(std::max(uz, 0.0), dims[2] - 1.0);
   double outside = 0.0;
-  if (cx != ux || cy != uy || cz != uz) outside = spacing * std::sqrt((ux - cx) * (ux - cx) + (uy - cy) * (uy - cy) + (uz - cz) * (uz - cz));
+  if (cx != ux || cy != uy || cz != uz)
+    outside =
+        spacing * std::sqrt((ux - cx) * (ux - cx) + (uy - cy) * (uy - cy) + (uz - cz) * (uz - cz));
   const int i = std::min(static_cast<int>(cx), dims[0] - 2);
   const int j = std::min(static_cast<int>(cy), dims[1] - 2);
   const int k = std::min(static_cast<int>(cz), dims[2] - 2);
   const double fx = cx - i, fy = cy - j, fz = cz - k;
-  const std::size_t sx = 1, sy = static_cast<std::size_t>(dims[0]), sz = sy * static_cast<std::size_t>(dims[1]);
+  const std::size_t sx = 1, sy = static_cast<std::size_t>(dims[0]),
+                    sz = sy * static_cast<std::size_t>(dims[1]);
   const float* v = values.data() + k * sz + j * sy + i * sx;
   const double c00 = v[0] + fx * (v[sx] - v[0]);
   const double c10 = v[sy] + fx * (v[sy + sx] - v[sy]);
@@ -433,11 +447,12 @@ double DistanceField::Distance(const Vec3& p_O, Vec3* unit_gradient) const {
 Vec3 GrazingPoint(const DistanceField& field, const Vec3& x, const Vec3& eye, double max_travel) {
   const double step = 0.25 * field.spacing;
   const double level = field.Distance(x);
-  const auto facing = [&](Vec3& p) {  // p onto the level set; returns n · v there (< 0: faces the eye)
-    Vec3 n;
-    for (int i = 0; i < 3; ++i) p -= (field.Distance(p, &n) - level) * n;
-    return n.dot((p - eye).normalized());
-  };
+  const auto facing =
+      [&](Vec3& p) {  // p onto the level set; returns n · v there (< 0: faces the eye)
+        Vec3 n;
+        for (int i = 0; i < 3; ++i) p -= (field.Distance(p, &n) - level) * n;
+        return n.dot((p - eye).normalized());
+      };
   Vec3 a = x;
   if (!(std::abs(level) < 4.0 * field.spacing) || !(facing(a) < 0.0)) return x;
   for (double travelled = 0.0; travelled < max_travel; travelled += step) {

@@ -38,12 +38,14 @@ void Intrinsics::Validate(const std::string& context) const {
   const auto& [k1, k2, p1, p2, k3] = distortion;
   Require(std::abs(p1) <= 1.0, context, "distortion[2]", p1, "p1 in [-1, 1]");
   Require(std::abs(p2) <= 1.0, context, "distortion[3]", p2, "p2 in [-1, 1]");
-  const double corner = std::hypot(std::max(cx + 0.5, width - 0.5 - cx) / fx, std::max(cy + 0.5, height - 0.5 - cy) / fy);
+  const double corner = std::hypot(std::max(cx + 0.5, width - 0.5 - cx) / fx,
+                                   std::max(cy + 0.5, height - 0.5 - cy) / fy);
   // Walks r outwards (steps of 1e-3, up to 10) to where r_d reaches the corner.
   bool covers = false;
   for (int i = 0; i <= 10000; ++i) {
     const double r = 1e-3 * i, r2 = r * r;
-    if (!(1.0 + r2 * (3.0 * k1 + r2 * (5.0 * k2 + r2 * 7.0 * k3)) > 0.0)) break;  // d(r_d)/dr: folds over
+    if (!(1.0 + r2 * (3.0 * k1 + r2 * (5.0 * k2 + r2 * 7.0 * k3)) > 0.0))
+      break;  // d(r_d)/dr: folds over
     const double factor = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
     if (r * factor < corner) continue;
     covers = factor >= 0.5 && factor <= 2.0;
@@ -51,9 +53,12 @@ void Intrinsics::Validate(const std::string& context) const {
   }
   if (!covers) {
     std::ostringstream os;
-    os << context << ": camera intrinsics field 'distortion' is (" << k1 << ", " << k2 << ", " << p1 << ", " << p2 << ", " << k3
-       << "), expected a radial distortion that can be inverted over the whole image (r (1 + k1 r^2 + k2 r^4 + k3 r^6)"
-       << " growing with r up to the corner's normalised radius " << corner << ", there within a factor of 2 of r)";
+    os << context << ": camera intrinsics field 'distortion' is (" << k1 << ", " << k2 << ", " << p1
+       << ", " << p2 << ", " << k3
+       << "), expected a radial distortion that can be inverted over the whole image (r (1 + k1 "
+          "r^2 + k2 r^4 + k3 r^6)"
+       << " growing with r up to the corner's normalised radius " << corner
+       << ", there within a factor of 2 of r)";
     throw InputError(os.str());
   }
 }

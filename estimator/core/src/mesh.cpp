@@ -82,8 +82,8 @@ MassProperties ComputeMassProperties(const std::vector<const TriangleMesh*>& mes
       const Vec3 s = a + b + c;
       volume += v;
       first += v * s / 4.0;
-      second += v / 20.0 * (a * a.transpose() + b * b.transpose() + c * c.transpose() +
-                            s * s.transpose());
+      second += v / 20.0 *
+                (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
     }
   }
   MassProperties mp;
@@ -147,9 +147,11 @@ bool IsClosed(const TriangleMesh& mesh, double weld_tolerance) {
 
 bool IsWatertightForParity(const std::vector<const TriangleMesh*>& meshes, double weld_tolerance) {
   std::vector<Vec3> vertices;
-  for (const TriangleMesh* m : meshes) vertices.insert(vertices.end(), m->vertices.begin(), m->vertices.end());
+  for (const TriangleMesh* m : meshes)
+    vertices.insert(vertices.end(), m->vertices.begin(), m->vertices.end());
   const std::vector<int> id = WeldVertices(vertices, weld_tolerance);
-  std::map<std::pair<int, int>, std::array<int, 2>> edges;  // (min, max) -> uses (forward, backward)
+  std::map<std::pair<int, int>, std::array<int, 2>>
+      edges;  // (min, max) -> uses (forward, backward)
   std::size_t base = 0;
   bool any = false;
   for (const TriangleMesh* m : meshes) {
@@ -230,8 +232,7 @@ void AppendRing(std::vector<Vec3>& v, double r, double z) {
 }
 
 // Triangulates stacked rings (ring 0 at the bottom) plus optional bottom/top pole vertices.
-void StitchRings(int num_rings, int bottom_pole, int top_pole,
-                 std::vector<Eigen::Vector3i>& tris) {
+void StitchRings(int num_rings, int bottom_pole, int top_pole, std::vector<Eigen::Vector3i>& tris) {
   for (int r = 0; r + 1 < num_rings; ++r) {
     for (int i = 0; i < kSegments; ++i) {
       const int j = (i + 1) % kSegments;
@@ -286,24 +287,28 @@ TriangleMesh MergedGeometry(const std::vector<TriangleMesh>& meshes) {
   return merged;
 }
 
-TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles, double max_error) {
+TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles,
+                          double max_error) {
   mesh.Validate("SimplifyMesh");
   const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
   std::vector<Eigen::Vector3i> tris = mesh.triangles;
   std::vector<bool> tri_alive(nt, true), vert_alive(nv, true), locked(nv, false);
   std::vector<std::vector<int>> incident(nv);
   for (std::size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 3; ++k) incident[static_cast<std::size_t>(tris[t][k])].push_back(static_cast<int>(t));
+    for (int k = 0; k < 3; ++k)
+      incident[static_cast<std::size_t>(tris[t][k])].push_back(static_cast<int>(t));
   std::map<std::pair<int, int>, int> edge_uses;
   for (const Eigen::Vector3i& t : tris)
     for (int k = 0; k < 3; ++k) ++edge_uses[std::minmax(t[k], t[(k + 1) % 3])];
   for (const auto& [e, uses] : edge_uses)
-    if (uses != 2) locked[static_cast<std::size_t>(e.first)] = locked[static_cast<std::size_t>(e.second)] = true;
+    if (uses != 2)
+      locked[static_cast<std::size_t>(e.first)] = locked[static_cast<std::size_t>(e.second)] = true;
   // Plane quadrics, one per triangle, summed at its vertices.
   std::vector<Eigen::Matrix4d> Q(nv, Eigen::Matrix4d::Zero());
   const auto normal_of = [&](const Eigen::Vector3i& t) {
     const Vec3& a = mesh.vertices[static_cast<std::size_t>(t[0])];
-    return Vec3((mesh.vertices[static_cast<std::size_t>(t[1])] - a).cross(mesh.vertices[static_cast<std::size_t>(t[2])] - a));
+    return Vec3((mesh.vertices[static_cast<std::size_t>(t[1])] - a)
+                    .cross(mesh.vertices[static_cast<std::size_t>(t[2])] - a));
   };
   for (const Eigen::Vector3i& t : tris) {
     const Vec3 n = normal_of(t);
@@ -317,7 +322,8 @@ TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
     for (int t : incident[static_cast<std::size_t>(v)])
       if (tri_alive[static_cast<std::size_t>(t)])
         for (int k = 0; k < 3; ++k)
-          if (tris[static_cast<std::size_t>(t)][k] != v) out.insert(tris[static_cast<std::size_t>(t)][k]);
+          if (tris[static_cast<std::size_t>(t)][k] != v)
+            out.insert(tris[static_cast<std::size_t>(t)][k]);
     return out;
   };
   struct Candidate {
@@ -335,8 +341,10 @@ TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
     if (locked[static_cast<std::size_t>(u)]) return;
     Eigen::Vector4d x;
     x << mesh.vertices[static_cast<std::size_t>(v)], 1.0;
-    const double cost = x.dot((Q[static_cast<std::size_t>(u)] + Q[static_cast<std::size_t>(v)]) * x);
-    heap.push({std::max(cost, 0.0), u, v, stamp[static_cast<std::size_t>(u)], stamp[static_cast<std::size_t>(v)]});
+    const double cost =
+        x.dot((Q[static_cast<std::size_t>(u)] + Q[static_cast<std::size_t>(v)]) * x);
+    heap.push({std::max(cost, 0.0), u, v, stamp[static_cast<std::size_t>(u)],
+               stamp[static_cast<std::size_t>(v)]});
   };
   for (const auto& [e, uses] : edge_uses) push(e.first, e.second), push(e.second, e.first);
   std::size_t alive = nt;
@@ -345,14 +353,17 @@ TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
     const Candidate c = heap.top();
     heap.pop();
     const std::size_t u = static_cast<std::size_t>(c.u), v = static_cast<std::size_t>(c.v);
-    if (!vert_alive[u] || !vert_alive[v] || stamp[u] != c.stamp_u || stamp[v] != c.stamp_v) continue;  // stale
+    if (!vert_alive[u] || !vert_alive[v] || stamp[u] != c.stamp_u || stamp[v] != c.stamp_v)
+      continue;  // stale
     if (c.cost > limit) break;
     // Link condition: the two vertices share exactly the neighbours across their edge.
     const std::set<int> nu = neighbours(c.u), nvs = neighbours(c.v);
     int shared = 0, across = 0;
     for (int w : nu) shared += nvs.count(w) ? 1 : 0;
     for (int t : incident[u])
-      if (tri_alive[static_cast<std::size_t>(t)] && (tris[static_cast<std::size_t>(t)].array() == c.v).any()) ++across;
+      if (tri_alive[static_cast<std::size_t>(t)] &&
+          (tris[static_cast<std::size_t>(t)].array() == c.v).any())
+        ++across;
     if (across != 2 || shared != 2) continue;
     // No triangle may flip or flatten.
     bool ok = true;
@@ -363,7 +374,9 @@ TriangleMesh SimplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
       for (int k = 0; k < 3; ++k)
         if (moved[k] == c.u) moved[k] = c.v;
       const Vec3 before = normal_of(tri), after = normal_of(moved);
-      if (!(after.norm() > 1e-3 * before.norm()) || after.normalized().dot(before.normalized()) < 0.2) ok = false;
+      if (!(after.norm() > 1e-3 * before.norm()) ||
+          after.normalized().dot(before.normalized()) < 0.2)
+        ok = false;
     }
     if (!ok) continue;
     for (int t : incident[u]) {
@@ -541,11 +554,16 @@ void ConvexPiece::UpdateBounds() {
 
 const char* ConvexPiece::KindName(Kind kind) {
   switch (kind) {
-    case Kind::kBox: return "box";
-    case Kind::kSphere: return "sphere";
-    case Kind::kCylinder: return "cylinder";
-    case Kind::kCapsule: return "capsule";
-    case Kind::kHull: return "hull";
+    case Kind::kBox:
+      return "box";
+    case Kind::kSphere:
+      return "sphere";
+    case Kind::kCylinder:
+      return "cylinder";
+    case Kind::kCapsule:
+      return "capsule";
+    case Kind::kHull:
+      return "hull";
   }
   return "?";
 }

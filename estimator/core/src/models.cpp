@@ -7,10 +7,14 @@ namespace inhand {
 
 const char* JointTypeName(JointType type) {
   switch (type) {
-    case JointType::kRevolute: return "revolute";
-    case JointType::kContinuous: return "continuous";
-    case JointType::kPrismatic: return "prismatic";
-    case JointType::kFixed: return "fixed";
+    case JointType::kRevolute:
+      return "revolute";
+    case JointType::kContinuous:
+      return "continuous";
+    case JointType::kPrismatic:
+      return "prismatic";
+    case JointType::kFixed:
+      return "fixed";
   }
   return "?";
 }

@@ -8,8 +8,8 @@
 namespace inhand {
 
 void CheckFailed(const char* condition, const char* file, int line, const std::string& message) {
-  std::fprintf(stderr, "inhand: internal check failed at %s:%d: %s (%s)\n", file, line,
-               condition, message.c_str());
+  std::fprintf(stderr, "inhand: internal check failed at %s:%d: %s (%s)\n", file, line, condition,
+               message.c_str());
   std::abort();
 }
 

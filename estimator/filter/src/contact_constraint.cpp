@@ -8,7 +8,8 @@
 
 namespace inhand {
 
-bool Filter::ApplyContactConstraint(const ContactPair& pair, const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
+bool Filter::ApplyContactConstraint(const ContactPair& pair,
+                                    const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
                                     FilterTrace::Contact& rec) {
   const Vec3 r = pair.c_o_P - pair.c_f_P;
   ContactMeasurementJacobian(pair.c_o_P, s_.p, J_f, H3_);
@@ -17,7 +18,8 @@ bool Filter::ApplyContactConstraint(const ContactPair& pair, const Eigen::Matrix
     H1_.noalias() = pair.normal_P.transpose() * H3_;
     const Eigen::Matrix<double, 1, 1> r1(pair.normal_P.dot(r));
     const Eigen::Matrix<double, 1, 1> R1(var);
-    if (Update<1>(r1, H1_, R1, params_.contact_gate_chi2, &rec.mahalanobis) != Outcome::kApplied) return false;
+    if (Update<1>(r1, H1_, R1, params_.contact_gate_chi2, &rec.mahalanobis) != Outcome::kApplied)
+      return false;
     CapContactInformation(var);
     return true;
   }

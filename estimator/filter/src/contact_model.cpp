@@ -39,14 +39,16 @@ Vec6 TwistSolver::Solve(double damping) const {
 Eigen::Matrix<double, 2, 6> VisualMeasurementJacobian(const Vec3& X_P, const Vec3& p_PO,
                                                       const Transform& T_PC, const Intrinsics& K) {
   const Mat3 Rc_T = T_PC.linear().transpose();
-  const Eigen::Matrix<double, 2, 3> Jx = K.ProjectJacobian(Rc_T * (X_P - T_PC.translation())) * Rc_T;
+  const Eigen::Matrix<double, 2, 3> Jx =
+      K.ProjectJacobian(Rc_T * (X_P - T_PC.translation())) * Rc_T;
   Eigen::Matrix<double, 2, 6> H;
   H.leftCols<3>() = Jx;
   H.rightCols<3>() = -Jx * Skew(X_P - p_PO);
   return H;
 }
 
-Eigen::Matrix<double, 2, 6> CameraPoseJacobian(const Vec3& X_P, const Transform& T_PC, const Intrinsics& K) {
+Eigen::Matrix<double, 2, 6> CameraPoseJacobian(const Vec3& X_P, const Transform& T_PC,
+                                               const Intrinsics& K) {
   const Vec3 X_C = T_PC.linear().transpose() * (X_P - T_PC.translation());
   const Eigen::Matrix<double, 2, 3> Jp = K.ProjectJacobian(X_C);
   Eigen::Matrix<double, 2, 6> C;

@@ -13,11 +13,16 @@ namespace inhand {
 
 const char* ContactKindName(ContactKind kind) {
   switch (kind) {
-    case ContactKind::kKinematic: return "kinematic";
-    case ContactKind::kTorque: return "torque";
-    case ContactKind::kRejectedCone: return "rejected_cone";
-    case ContactKind::kRejectedForce: return "rejected_force";
-    case ContactKind::kCandidate: return "candidate";
+    case ContactKind::kKinematic:
+      return "kinematic";
+    case ContactKind::kTorque:
+      return "torque";
+    case ContactKind::kRejectedCone:
+      return "rejected_cone";
+    case ContactKind::kRejectedForce:
+      return "rejected_force";
+    case ContactKind::kCandidate:
+      return "candidate";
   }
   return "?";
 }
@@ -33,7 +38,8 @@ void FilterTrace::Clear() {
   slipping = false;
 }
 
-Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams& params, const FilterOptions& options)
+Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams& params,
+               const FilterOptions& options)
     : hand_(hand),
       contacts_(contacts),
       params_(params),
@@ -44,8 +50,10 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
   params_.Validate();
   const Mat3& G = options_.gyration_O;
   if (!G.isZero(0.0)) {
-    if (!G.allFinite() || !G.isApprox(G.transpose(), 1e-9) || Eigen::SelfAdjointEigenSolver<Mat3>(G).eigenvalues().minCoeff() <= 0.0)
-      throw InputError("filter options: the object's gyration tensor must be symmetric positive definite");
+    if (!G.allFinite() || !G.isApprox(G.transpose(), 1e-9) ||
+        Eigen::SelfAdjointEigenSolver<Mat3>(G).eigenvalues().minCoeff() <= 0.0)
+      throw InputError(
+          "filter options: the object's gyration tensor must be symmetric positive definite");
     gyration_inv_O_ = G.inverse();
     travel_ = params_.travel_orientation > 0.0;
   }
@@ -81,18 +89,22 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
 void StartSigmas::Validate(const std::string& source) const {
   const auto check = [&](const char* name, double v, double lo, double hi, const char* expected) {
     if (!(v >= lo && v <= hi))
-      throw InputError(source + ": '" + name + "' is " + std::to_string(v) + ", expected " + expected);
+      throw InputError(source + ": '" + name + "' is " + std::to_string(v) + ", expected " +
+                       expected);
   };
   check("sigma_position", position, 1e-6, 10.0, "in [1e-6, 10] m");
   check("sigma_orientation", orientation, 1e-6, 2 * M_PI, "in [1e-6, 2 pi] rad");
   check("sigma_joint_bias", bias, 0.0, 2 * M_PI, "in [0, 2 pi] rad");
-  for (long i = 0; i < bias_per_joint.size(); ++i) check("sigma_joint_bias", bias_per_joint[i], 0.0, 2 * M_PI, "in [0, 2 pi] rad");
+  for (long i = 0; i < bias_per_joint.size(); ++i)
+    check("sigma_joint_bias", bias_per_joint[i], 0.0, 2 * M_PI, "in [0, 2 pi] rad");
 }
 
-void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd>& q_meas, const StartSigmas& sigmas) {
+void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd>& q_meas,
+                   const StartSigmas& sigmas) {
   INHAND_CHECK(q_meas.size() == m_, "joint vector size does not match the hand");
   sigmas.Validate("filter start");
-  if (!T_PO.matrix().allFinite() || !q_meas.allFinite()) throw InputError("filter start: the pose or the joints are not finite");
+  if (!T_PO.matrix().allFinite() || !q_meas.allFinite())
+    throw InputError("filter start: the pose or the joints are not finite");
   INHAND_CHECK(sigmas.bias_per_joint.size() == 0 || sigmas.bias_per_joint.size() == m_,
                "per-joint bias sigmas do not match the hand");
   s_.p = T_PO.translation();
@@ -108,8 +120,10 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
   else
     s_.P.diagonal().segment(6, m_).setConstant(sigmas.bias * sigmas.bias);
   if (camera_state_) {
-    s_.P.diagonal().segment<3>(n_).setConstant(params_.camera_position_sigma * params_.camera_position_sigma);
-    s_.P.diagonal().tail<3>().setConstant(params_.camera_orientation_sigma * params_.camera_orientation_sigma);
+    s_.P.diagonal().segment<3>(n_).setConstant(params_.camera_position_sigma *
+                                               params_.camera_position_sigma);
+    s_.P.diagonal().tail<3>().setConstant(params_.camera_orientation_sigma *
+                                          params_.camera_orientation_sigma);
   }
   s_.q_prev = q_meas;
   s_.have_prev = true;
@@ -122,7 +136,8 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
 }
 
 void Filter::Restore(const FilterState& state) {
-  INHAND_CHECK(state.b.size() == m_ && state.q_window.size() == m_ && state.P.rows() == na_ && state.P.cols() == na_,
+  INHAND_CHECK(state.b.size() == m_ && state.q_window.size() == m_ && state.P.rows() == na_ &&
+                   state.P.cols() == na_,
                "filter state of another hand or parameters");
   s_ = state;  // same sizes: Eigen and std::vector reuse their storage
   delta_.setZero();
@@ -130,18 +145,21 @@ void Filter::Restore(const FilterState& state) {
 }
 
 void Filter::WidenPose(double sigma_position, double sigma_orientation) {
-  if (!(sigma_position >= 0.0 && sigma_orientation >= 0.0) || !std::isfinite(sigma_position) || !std::isfinite(sigma_orientation))
-    throw InputError("filter: widening the pose by sigma " + std::to_string(sigma_position) + " m, " +
-                     std::to_string(sigma_orientation) + " rad; expected finite and >= 0");
+  if (!(sigma_position >= 0.0 && sigma_orientation >= 0.0) || !std::isfinite(sigma_position) ||
+      !std::isfinite(sigma_orientation))
+    throw InputError("filter: widening the pose by sigma " + std::to_string(sigma_position) +
+                     " m, " + std::to_string(sigma_orientation) + " rad; expected finite and >= 0");
   s_.P.diagonal().head<3>().array() += sigma_position * sigma_position;
   s_.P.diagonal().segment<3>(3).array() += sigma_orientation * sigma_orientation;
 }
 
 void Filter::Relocate(const Transform& T_PO, const Mat6& pose_covariance) {
   const Eigen::LLT<Mat6> llt(pose_covariance);
-  if (!T_PO.matrix().allFinite() || !pose_covariance.allFinite() || !pose_covariance.isApprox(pose_covariance.transpose()) ||
-      llt.info() != Eigen::Success)
-    throw InputError("filter: relocating the object needs a finite pose and a symmetric positive definite covariance");
+  if (!T_PO.matrix().allFinite() || !pose_covariance.allFinite() ||
+      !pose_covariance.isApprox(pose_covariance.transpose()) || llt.info() != Eigen::Success)
+    throw InputError(
+        "filter: relocating the object needs a finite pose and a symmetric positive definite "
+        "covariance");
   s_.p = T_PO.translation();
   s_.R = Orthonormalize(T_PO.linear());
   delta_.setZero();
@@ -192,8 +210,8 @@ void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt)
   // are not modelled). F = I to first order, as in the paper. The camera error is constant.
   const double dtp = std::max(dt, 0.0);
   // Only once the object has been held: before the grasp nothing holds it, but nothing moves it.
-  const bool slipping = options_.use_torque && params_.slip_torque > 0.0 && s_.max_grip >= params_.slip_torque &&
-                        s_.grip < params_.slip_torque;
+  const bool slipping = options_.use_torque && params_.slip_torque > 0.0 &&
+                        s_.max_grip >= params_.slip_torque && s_.grip < params_.slip_torque;
   const double walk = slipping ? params_.slip_scale * params_.slip_scale : 1.0;
   s_.trace.slipping = slipping;
   const double sp = walk * params_.process_position * params_.process_position * dtp +
@@ -207,7 +225,8 @@ void Filter::Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt)
   s_.q_prev = q_meas;
 }
 
-void Filter::Step(const Eigen::Ref<const Eigen::VectorXd>& q_meas, const Eigen::Ref<const Eigen::VectorXd>& tau, double dt) {
+void Filter::Step(const Eigen::Ref<const Eigen::VectorXd>& q_meas,
+                  const Eigen::Ref<const Eigen::VectorXd>& tau, double dt) {
   Predict(q_meas, dt);
   UpdateContacts(tau);
 }
@@ -224,15 +243,18 @@ void Filter::GrowWithTravel(const Eigen::Ref<const Eigen::VectorXd>& q_meas, dou
   }
   if (travel > 0.0 && std::isfinite(travel)) {
     const Mat3 G_inv = s_.R * gyration_inv_O_ * s_.R.transpose();
-    s_.P.block<3, 3>(3, 3) += (0.5 * params_.travel_orientation * travel) * (G_inv + G_inv.transpose());  // exactly symmetric
+    s_.P.block<3, 3>(3, 3) += (0.5 * params_.travel_orientation * travel) *
+                              (G_inv + G_inv.transpose());  // exactly symmetric
   }
   s_.q_window = q_meas;
   s_.window_time = 0.0;
 }
 
 template <int D>
-Filter::Outcome Filter::Update(const Eigen::Matrix<double, D, 1>& r_in, const Eigen::Matrix<double, D, Eigen::Dynamic>& H,
-                               const Eigen::Matrix<double, D, D>& R, double gate_chi2, double* mahalanobis) {
+Filter::Outcome Filter::Update(const Eigen::Matrix<double, D, 1>& r_in,
+                               const Eigen::Matrix<double, D, Eigen::Dynamic>& H,
+                               const Eigen::Matrix<double, D, D>& R, double gate_chi2,
+                               double* mahalanobis) {
   Eigen::Matrix<double, D, Eigen::Dynamic>* HP;
   Eigen::Matrix<double, D, Eigen::Dynamic>* SKt;
   Eigen::Matrix<double, Eigen::Dynamic, D>* K;
@@ -277,7 +299,8 @@ Filter::Outcome Filter::Update(const Eigen::Matrix<double, D, 1>& r_in, const Ei
   delta_saved_ = delta_;
   delta_.noalias() += *K * r;
   // (A variance may be 0, a known state; below 0 beyond rounding the covariance is lost.)
-  if (!delta_.allFinite() || !Pn_.allFinite() || !(Pn_.diagonal().minCoeff() >= -1e-9 * Pn_.diagonal().maxCoeff())) {
+  if (!delta_.allFinite() || !Pn_.allFinite() ||
+      !(Pn_.diagonal().minCoeff() >= -1e-9 * Pn_.diagonal().maxCoeff())) {
     delta_ = delta_saved_;
     ++s_.trace.numeric_events;
     return Outcome::kNumeric;
@@ -286,11 +309,14 @@ Filter::Outcome Filter::Update(const Eigen::Matrix<double, D, 1>& r_in, const Ei
   return Outcome::kApplied;
 }
 
-template Filter::Outcome Filter::Update<1>(const Eigen::Matrix<double, 1, 1>&, const Eigen::Matrix<double, 1, Eigen::Dynamic>&,
+template Filter::Outcome Filter::Update<1>(const Eigen::Matrix<double, 1, 1>&,
+                                           const Eigen::Matrix<double, 1, Eigen::Dynamic>&,
                                            const Eigen::Matrix<double, 1, 1>&, double, double*);
-template Filter::Outcome Filter::Update<2>(const Eigen::Matrix<double, 2, 1>&, const Eigen::Matrix<double, 2, Eigen::Dynamic>&,
+template Filter::Outcome Filter::Update<2>(const Eigen::Matrix<double, 2, 1>&,
+                                           const Eigen::Matrix<double, 2, Eigen::Dynamic>&,
                                            const Eigen::Matrix<double, 2, 2>&, double, double*);
-template Filter::Outcome Filter::Update<3>(const Eigen::Matrix<double, 3, 1>&, const Eigen::Matrix<double, 3, Eigen::Dynamic>&,
+template Filter::Outcome Filter::Update<3>(const Eigen::Matrix<double, 3, 1>&,
+                                           const Eigen::Matrix<double, 3, Eigen::Dynamic>&,
                                            const Eigen::Matrix<double, 3, 3>&, double, double*);
 
 void Filter::Commit() {

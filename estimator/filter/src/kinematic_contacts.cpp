@@ -16,7 +16,8 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
                                 params_.prediction_contact_distance);
   contacts_.Query(kin_.link_poses(), T_PO(), reach, pairs_);
   const std::size_t k = pairs_.size();
-  for (std::size_t i = 0; i < k; ++i) PointJacobian(hand_, kin_, pairs_[i].link, pairs_[i].c_f_P, Jc_[i]);
+  for (std::size_t i = 0; i < k; ++i)
+    PointJacobian(hand_, kin_, pairs_[i].link, pairs_[i].c_f_P, Jc_[i]);
   EstimateContactForces(tau);
   if (iteration == 0) s_.active.clear();
   for (std::size_t i = 0; i < k; ++i) {

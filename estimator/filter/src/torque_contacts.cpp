@@ -27,11 +27,14 @@ void Filter::ComputeCandidateWeights() {
     const std::vector<int>& chain = hand_.support[static_cast<std::size_t>(pairs_[i].link)];
     return chain.empty() ? -1 : chain.front();
   };
-  std::fill(finger_nearest_.begin(), finger_nearest_.end(), std::numeric_limits<double>::infinity());
+  std::fill(finger_nearest_.begin(), finger_nearest_.end(),
+            std::numeric_limits<double>::infinity());
   for (std::size_t i = 0; i < k; ++i)
-    if (const int f = finger(i); f >= 0) finger_nearest_[f] = std::min(finger_nearest_[f], std::max(pairs_[i].distance, 0.0));
+    if (const int f = finger(i); f >= 0)
+      finger_nearest_[f] = std::min(finger_nearest_[f], std::max(pairs_[i].distance, 0.0));
   for (std::size_t i = 0; i < k; ++i)
-    if (const int f = finger(i); f >= 0) inv_weight_[i] = CandidateWeight(finger_nearest_[f]) / CandidateWeight(pairs_[i].distance);
+    if (const int f = finger(i); f >= 0)
+      inv_weight_[i] = CandidateWeight(finger_nearest_[f]) / CandidateWeight(pairs_[i].distance);
 }
 
 // λ̄_i = w_i⁻¹ J_i (Σ w_j⁻¹ J_jᵀ J_j + μ I)⁻¹ τ: the weighted, damped (J_cᵀ)⁺ τ.
@@ -45,7 +48,8 @@ void Filter::EstimateContactForces(const Eigen::Ref<const Eigen::VectorXd>& tau)
   }
   ComputeCandidateWeights();
   JtJ_.setZero();
-  for (std::size_t i = 0; i < pairs_.size(); ++i) JtJ_.noalias() += inv_weight_[i] * (Jc_[i].transpose() * Jc_[i]);
+  for (std::size_t i = 0; i < pairs_.size(); ++i)
+    JtJ_.noalias() += inv_weight_[i] * (Jc_[i].transpose() * Jc_[i]);
   JtJ_.diagonal().array() += params_.torque_damping;
   ldlt_.compute(JtJ_);
   y_ = ldlt_.solve(tau);

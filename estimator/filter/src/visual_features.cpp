@@ -8,13 +8,17 @@
 
 namespace inhand {
 
-int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Transform& T_PC_recorded, const Intrinsics& K) {
+int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Transform& T_PC_recorded,
+                         const Intrinsics& K) {
   // With a camera σ the camera pose's error ξ is a state: shared by all features and frames, it
   // keeps a common error from being counted once per feature.
-  const Transform T_PC = camera_state_ ? Transform(T_PC_recorded * MakeTransform(s_.xi.head<3>(), ExpSO3(s_.xi.tail<3>())))
-                                       : T_PC_recorded;
+  const Transform T_PC =
+      camera_state_
+          ? Transform(T_PC_recorded * MakeTransform(s_.xi.head<3>(), ExpSO3(s_.xi.tail<3>())))
+          : T_PC_recorded;
   const Mat3 Rc_T = T_PC.linear().transpose();
-  const Eigen::Matrix2d Rv = Eigen::Matrix2d::Identity() * (params_.pixel_sigma * params_.pixel_sigma);
+  const Eigen::Matrix2d Rv =
+      Eigen::Matrix2d::Identity() * (params_.pixel_sigma * params_.pixel_sigma);
   int used = 0;
   for (const VisualFeature& f : features) {
     FilterTrace::Visual rec;
@@ -32,7 +36,8 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
     H2_.leftCols<6>() = VisualMeasurementJacobian(X, s_.p, T_PC, K);
     if (camera_state_) H2_.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
     const Eigen::Vector2d r = f.pixel - rec.predicted;
-    rec.gated = Update<2>(r, H2_, Rv, params_.visual_gate_chi2, &rec.mahalanobis) != Outcome::kApplied;
+    rec.gated =
+        Update<2>(r, H2_, Rv, params_.visual_gate_chi2, &rec.mahalanobis) != Outcome::kApplied;
     if (!rec.gated) CapVisualInformation(Rv);
     used += !rec.gated;
     s_.trace.visual.push_back(rec);

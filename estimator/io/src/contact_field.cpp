@@ -39,7 +39,8 @@ bool ReadField(const fs::path& path, DistanceField& f) {
   f.source.resize(source_len);
   in.read(f.source.data(), source_len);
   f.values.resize(n);
-  in.read(reinterpret_cast<char*>(f.values.data()), static_cast<std::streamsize>(n * sizeof(float)));
+  in.read(reinterpret_cast<char*>(f.values.data()),
+          static_cast<std::streamsize>(n * sizeof(float)));
   if (!in || in.peek() != std::ifstream::traits_type::eof()) return false;
   f.dims = Eigen::Vector3i(dims[0], dims[1], dims[2]);
   f.origin = Vec3(origin[0], origin[1], origin[2]);
@@ -90,7 +91,8 @@ std::string ResolveContactFieldSource(const ObjectModel& obj, const ContactField
   for (const TriangleMesh& m : obj.visual) visual.push_back(&m);
   if (options.source == "visual") {
     if (!IsWatertightForParity(visual))
-      throw InputError(where + ": contact field source \"visual\" needs closed visual meshes (an edge "
+      throw InputError(where +
+                       ": contact field source \"visual\" needs closed visual meshes (an edge "
                        "is used unevenly: the mesh has a hole)");
     return "visual";
   }
@@ -99,7 +101,8 @@ std::string ResolveContactFieldSource(const ObjectModel& obj, const ContactField
   return IsWatertightForParity(visual) ? "visual" : "pieces";
 }
 
-void AttachContactField(ObjectModel& obj, const ContactFieldOptions& options, const std::string& where) {
+void AttachContactField(ObjectModel& obj, const ContactFieldOptions& options,
+                        const std::string& where) {
   options.Validate(where);
   const std::string source = ResolveContactFieldSource(obj, options, where);
   obj.field.reset();

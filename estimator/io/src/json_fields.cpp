@@ -15,17 +15,15 @@ std::string Field::Where() const {
 
 void Field::Fail(const std::string& expected) const {
   // Never dump a whole array or object: it can be arbitrarily large or deep.
-  std::string got = value.is_null()      ? "null"
-                    : value.is_array()   ? "an array of " + std::to_string(value.size()) + " elements"
-                    : value.is_object()  ? "an object of " + std::to_string(value.size()) + " fields"
-                                         : value.dump();
+  std::string got = value.is_null()    ? "null"
+                    : value.is_array() ? "an array of " + std::to_string(value.size()) + " elements"
+                    : value.is_object() ? "an object of " + std::to_string(value.size()) + " fields"
+                                        : value.dump();
   if (got.size() > 60) got = got.substr(0, 57) + "...";
   throw InputError(Where() + " is " + got + ", expected " + expected);
 }
 
-bool Field::Has(const std::string& key) const {
-  return value.is_object() && value.contains(key);
-}
+bool Field::Has(const std::string& key) const { return value.is_object() && value.contains(key); }
 
 Field Field::operator[](const std::string& key) const {
   if (!value.is_object()) Fail("an object with field '" + key + "'");
@@ -69,8 +67,9 @@ double Field::NonNegativeNumber() const {
 int Field::Integer() const {
   if (!value.is_number_integer()) Fail("an integer");
   // Read wide: get<int>() wraps 4294967297 to 1.
-  if (value.is_number_unsigned() ? value.get<unsigned long long>() > 2147483647ULL
-                                 : (value.get<long long>() > 2147483647LL || value.get<long long>() < -2147483647LL))
+  if (value.is_number_unsigned()
+          ? value.get<unsigned long long>() > 2147483647ULL
+          : (value.get<long long>() > 2147483647LL || value.get<long long>() < -2147483647LL))
     Fail("an integer in [-2147483647, 2147483647]");
   return static_cast<int>(value.get<long long>());
 }
@@ -112,7 +111,8 @@ Json ParseText(const std::string& text, const std::string& file) {
     // Nesting is bounded: 100,000 nested arrays overflowed the stack when the value was used.
     return Json::parse(text, [&](int depth, Json::parse_event_t, Json&) {
       if (depth > kMaxJsonDepth)
-        throw InputError(file + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+        throw InputError(file + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+                         " levels");
       return true;
     });
   } catch (const Json::parse_error& e) {

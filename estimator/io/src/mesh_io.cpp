@@ -3,11 +3,11 @@
 #include <HACD/hacdHACD.h>
 #include <LinearMath/btConvexHullComputer.h>
 
-#include <assimp/Importer.hpp>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -56,8 +56,8 @@ Material ReadMaterial(const aiScene& scene, const aiMaterial& ai, const fs::path
       fs::path p(ref);
       if (p.is_relative()) p = mesh_file.parent_path() / p;
       if (!fs::exists(p))
-        throw InputError(mesh_file.string() + ": material '" + m.name + "' names texture '" +
-                         ref + "', which does not exist (looked for " + p.string() + ")");
+        throw InputError(mesh_file.string() + ": material '" + m.name + "' names texture '" + ref +
+                         "', which does not exist (looked for " + p.string() + ")");
       m.texture_file = fs::weakly_canonical(p).string();
     }
   }
@@ -74,7 +74,8 @@ std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scal
   if (!fs::is_regular_file(path)) throw InputError(path + ": mesh path is not a file");
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // Smooth normals across gentle bends only: box edges and caps stay sharp.
   importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, 60.0f);
   // Keep the file's meshes apart: the grouping below decides what to merge.
@@ -89,7 +90,8 @@ std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scal
   std::size_t triangles = 0;
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) triangles += scene->mMeshes[mi]->mNumFaces;
   if (triangles > 5'000'000)
-    throw InputError(path + ": " + std::to_string(triangles) + " triangles, more than the 5,000,000 a model may have; simplify it");
+    throw InputError(path + ": " + std::to_string(triangles) +
+                     " triangles, more than the 5,000,000 a model may have; simplify it");
   // One output mesh per material (merging the file's meshes that share it) or per part.
   std::map<unsigned, TriangleMesh> by_material;
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
@@ -103,13 +105,16 @@ std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scal
     const int base = static_cast<int>(out.vertices.size());
     const bool has_uv = am.HasTextureCoords(0);
     // Keep per-vertex arrays aligned when meshes with and without uvs share a material.
-    if (has_uv && out.uvs.size() < out.vertices.size()) out.uvs.resize(out.vertices.size(), Vec2::Zero());
+    if (has_uv && out.uvs.size() < out.vertices.size())
+      out.uvs.resize(out.vertices.size(), Vec2::Zero());
     for (unsigned v = 0; v < am.mNumVertices; ++v) {
       out.vertices.emplace_back(am.mVertices[v].x, am.mVertices[v].y, am.mVertices[v].z);
       if (am.HasNormals())
         out.normals.emplace_back(am.mNormals[v].x, am.mNormals[v].y, am.mNormals[v].z);
-      if (has_uv) out.uvs.emplace_back(am.mTextureCoords[0][v].x, am.mTextureCoords[0][v].y);
-      else if (!out.uvs.empty()) out.uvs.emplace_back(0.0, 0.0);
+      if (has_uv)
+        out.uvs.emplace_back(am.mTextureCoords[0][v].x, am.mTextureCoords[0][v].y);
+      else if (!out.uvs.empty())
+        out.uvs.emplace_back(0.0, 0.0);
     }
     for (unsigned f = 0; f < am.mNumFaces; ++f) {
       const aiFace& face = am.mFaces[f];
@@ -135,8 +140,8 @@ std::vector<TriangleMesh> LoadMeshFile(const std::string& path, const Vec3& scal
 const std::vector<TriangleMesh>& MeshCache::Get(const std::string& path, const Vec3& scale,
                                                 MeshGrouping grouping) {
   std::ostringstream key;
-  key << std::setprecision(17) << path << '|' << scale.x() << ',' << scale.y() << ','
-      << scale.z() << '|' << static_cast<int>(grouping);
+  key << std::setprecision(17) << path << '|' << scale.x() << ',' << scale.y() << ',' << scale.z()
+      << '|' << static_cast<int>(grouping);
   auto it = meshes_.find(key.str());
   if (it == meshes_.end())
     it = meshes_.emplace(key.str(), LoadMeshFile(path, scale, grouping)).first;
@@ -151,8 +156,8 @@ ConvexPiece ComputeConvexHull(const std::vector<Vec3>& points, const std::string
   coords.reserve(points.size() * 3);
   for (const Vec3& p : points) coords.insert(coords.end(), {p.x(), p.y(), p.z()});
   btConvexHullComputer hull;
-  hull.compute(coords.data(), 3 * static_cast<int>(sizeof(double)),
-               static_cast<int>(points.size()), 0.0, 0.0);
+  hull.compute(coords.data(), 3 * static_cast<int>(sizeof(double)), static_cast<int>(points.size()),
+               0.0, 0.0);
   if (hull.faces.size() < 4)
     throw InputError(source + ": points are degenerate (flat or collinear), no 3-D convex hull");
   std::vector<Vec3> vertices;
@@ -201,9 +206,7 @@ std::vector<ConvexPiece> ComponentHulls(const std::vector<TriangleMesh>& meshes,
   return pieces;
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 std::string CacheDirectory(const std::string& override_dir) {
   if (!override_dir.empty()) return override_dir;
@@ -245,7 +248,8 @@ std::vector<ConvexPiece> ReadPiecesObj(const std::string& path, const std::strin
   }
   std::vector<ConvexPiece> pieces;
   for (std::size_t i = 0; i < groups.size(); ++i)
-    pieces.push_back(ComputeConvexHull(groups[i], source + " (HACD piece " + std::to_string(i) + ")"));
+    pieces.push_back(
+        ComputeConvexHull(groups[i], source + " (HACD piece " + std::to_string(i) + ")"));
   return pieces;
 }
 
@@ -257,8 +261,10 @@ std::string PiecesObjText(const std::vector<ConvexPiece>& pieces) {
   int base = 1;
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     out << "o piece_" << i << "\n";
-    for (const Vec3& v : pieces[i].hull_vertices) out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << "\n";
-    for (const auto& t : pieces[i].hull_triangles) out << "f " << base + t[0] << ' ' << base + t[1] << ' ' << base + t[2] << "\n";
+    for (const Vec3& v : pieces[i].hull_vertices)
+      out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << "\n";
+    for (const auto& t : pieces[i].hull_triangles)
+      out << "f " << base + t[0] << ' ' << base + t[1] << ' ' << base + t[2] << "\n";
     base += static_cast<int>(pieces[i].hull_vertices.size());
   }
   return out.str();
@@ -286,8 +292,8 @@ ObjText MeshesObjText(const std::vector<TriangleMesh>& meshes, const std::string
     const TriangleMesh& m = meshes[i];
     m.Validate("MeshesObjText");
     const std::string material = "material_" + std::to_string(i);
-    mtl << "newmtl " << material << "\nKd " << m.material.rgba[0] << ' ' << m.material.rgba[1] << ' ' << m.material.rgba[2]
-        << "\nd " << m.material.rgba[3] << "\n";
+    mtl << "newmtl " << material << "\nKd " << m.material.rgba[0] << ' ' << m.material.rgba[1]
+        << ' ' << m.material.rgba[2] << "\nd " << m.material.rgba[3] << "\n";
     if (!texture_names[i].empty()) mtl << "map_Kd " << texture_names[i] << "\n";
     obj << "g part_" << i << "\nusemtl " << material << "\n";
     for (const Vec3& v : m.vertices) obj << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << "\n";
@@ -309,8 +315,8 @@ ObjText MeshesObjText(const std::vector<TriangleMesh>& meshes, const std::string
   return {obj.str(), mtl.str()};
 }
 
-std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, double slab, int max_slabs,
-                                   const std::string& source) {
+std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, double slab,
+                                   int max_slabs, const std::string& source) {
   INHAND_CHECK(slab > 0.0 && max_slabs >= 1, "slab thickness and count must be positive");
   std::vector<ConvexPiece> pieces;
   int index = 0;
@@ -331,9 +337,11 @@ std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, doub
           const Vec3& p = solid.vertices[static_cast<std::size_t>(t[e])];
           const Vec3& q = solid.vertices[static_cast<std::size_t>(t[(e + 1) % 3])];
           for (const double plane : {a, b})
-            if ((p[axis] - plane) * (q[axis] - plane) < 0.0) points.push_back(p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis])));
+            if ((p[axis] - plane) * (q[axis] - plane) < 0.0)
+              points.push_back(p + (q - p) * ((plane - p[axis]) / (q[axis] - p[axis])));
         }
-      const std::string where = source + " (solid " + std::to_string(index) + ", slab " + std::to_string(k) + ")";
+      const std::string where =
+          source + " (solid " + std::to_string(index) + ", slab " + std::to_string(k) + ")";
       if (points.size() < 4) continue;
       try {
         pieces.push_back(ComputeConvexHull(points, where));
@@ -351,7 +359,8 @@ std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, doub
 std::vector<ConvexPiece> DecomposeHacd(const TriangleMesh& mesh, const HacdParams& params,
                                        const std::string& source) {
   if (params.min_pieces < 1 || params.vertices_per_piece < 4 || !(params.concavity > 0.0))
-    throw InputError(source + ": HACD parameters need min_pieces >= 1, vertices_per_piece >= 4, "
+    throw InputError(source +
+                     ": HACD parameters need min_pieces >= 1, vertices_per_piece >= 4, "
                      "concavity > 0");
   const fs::path dir = CacheDirectory(params.cache_dir);
   std::ostringstream name;

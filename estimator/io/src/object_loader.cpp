@@ -22,12 +22,14 @@ void PiecesFromMesh(const std::vector<TriangleMesh>& meshes, const std::string& 
                     std::vector<ConvexPiece>& out) {
   if (method == "hull") {
     std::vector<Vec3> points;
-    for (const TriangleMesh& m : meshes) points.insert(points.end(), m.vertices.begin(), m.vertices.end());
+    for (const TriangleMesh& m : meshes)
+      points.insert(points.end(), m.vertices.begin(), m.vertices.end());
     out.push_back(ComputeConvexHull(points, where));
   } else if (method == "components") {
     for (ConvexPiece& p : ComponentHulls(meshes, where)) out.push_back(std::move(p));
   } else if (method == "hacd") {
-    for (ConvexPiece& p : DecomposeHacd(MergedGeometry(meshes), hacd, where)) out.push_back(std::move(p));
+    for (ConvexPiece& p : DecomposeHacd(MergedGeometry(meshes), hacd, where))
+      out.push_back(std::move(p));
   } else {
     throw InputError(where + ": collision method '" + method +
                      "' is unknown, expected \"hull\", \"components\" or \"hacd\"");
@@ -51,7 +53,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
   for (std::size_t i = 0; i < visual.Size(); ++i) {
     const jsonf::Field v = visual.At(i);
     const std::string file = ResolveResource(v["mesh"].String(), path, packages);
-    if (std::find(obj.mesh_files.begin(), obj.mesh_files.end(), file) == obj.mesh_files.end()) obj.mesh_files.push_back(file);
+    if (std::find(obj.mesh_files.begin(), obj.mesh_files.end(), file) == obj.mesh_files.end())
+      obj.mesh_files.push_back(file);
     const Vec3 scale = v.Has("scale") ? v["scale"].Vector3() : Vec3::Ones();
     const Transform T = v.Has("pose") ? v["pose"].Pose() : Transform::Identity();
     for (TriangleMesh mesh : cache.Get(file, scale)) {
@@ -59,7 +62,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
       if (v.Has("rgba")) {
         const jsonf::Field c = v["rgba"];
         if (c.Size() != 4) c.Fail("an array of 4 numbers in [0, 1]");
-        for (int k = 0; k < 4; ++k) mesh.material.rgba[k] = c.At(static_cast<std::size_t>(k)).Number();
+        for (int k = 0; k < 4; ++k)
+          mesh.material.rgba[k] = c.At(static_cast<std::size_t>(k)).Number();
       }
       if (v.Has("opacity")) {
         const double a = v["opacity"].Number();
@@ -85,7 +89,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
     const std::string where = c.Where();
     if (c.Has("mesh")) {
       const std::string file = ResolveResource(c["mesh"].String(), path, packages);
-      if (std::find(obj.mesh_files.begin(), obj.mesh_files.end(), file) == obj.mesh_files.end()) obj.mesh_files.push_back(file);
+      if (std::find(obj.mesh_files.begin(), obj.mesh_files.end(), file) == obj.mesh_files.end())
+        obj.mesh_files.push_back(file);
       const std::string method = c.Has("method") ? c["method"].String() : "components";
       std::vector<TriangleMesh> meshes = cache.Get(
           file, c.Has("scale") ? c["scale"].Vector3() : Vec3::Ones(), MeshGrouping::kByPart);
@@ -104,7 +109,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
       const bool capsule = c.Has("capsule");
       const jsonf::Field d = c[capsule ? "capsule" : "cylinder"];
       const double radius = d["radius"].PositiveNumber();
-      const double length = capsule ? d["length"].NonNegativeNumber() : d["length"].PositiveNumber();
+      const double length =
+          capsule ? d["length"].NonNegativeNumber() : d["length"].PositiveNumber();
       obj.pieces.push_back(capsule ? ConvexPiece::Capsule(radius, 0.5 * length, T)
                                    : ConvexPiece::Cylinder(radius, 0.5 * length, T));
       methods.emplace_back(capsule ? "capsule" : "cylinder");
@@ -146,7 +152,9 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
     M << I["ixx"].PositiveNumber(), ixy, ixz, ixy, I["iyy"].PositiveNumber(), iyz, ixz, iyz,
         I["izz"].PositiveNumber();
     if (!M.allFinite() || Eigen::SelfAdjointEigenSolver<Mat3>(M).eigenvalues().minCoeff() <= 0.0)
-      throw InputError(path + ": field 'inertia' is not positive definite (no rigid body has it: check ixy, ixz, iyz)");
+      throw InputError(
+          path +
+          ": field 'inertia' is not positive definite (no rigid body has it: check ixy, ixz, iyz)");
     obj.inertia_com = M;
   }
 
@@ -156,8 +164,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
       const jsonf::Field t = tags.At(i);
       TagPlacement tag;
       tag.family = t.Has("family") ? t["family"].String() : "tag36h11";
-      if (tag.family != "tag36h11" && tag.family != "tag25h9" && tag.family != "tag16h5" && tag.family != "tagStandard41h12" &&
-          tag.family != "tagCircle21h7")
+      if (tag.family != "tag36h11" && tag.family != "tag25h9" && tag.family != "tag16h5" &&
+          tag.family != "tagStandard41h12" && tag.family != "tagCircle21h7")
         t["family"].Fail("tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
       tag.id = t["id"].Integer();
       if (tag.id < 0) t["id"].Fail("an id >= 0");
@@ -173,7 +181,8 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
     if (!c.value.is_object()) c.Fail("an object with \"source\", \"spacing\" or \"padding\"");
     for (auto it = c.value.begin(); it != c.value.end(); ++it)
       if (it.key() != "source" && it.key() != "spacing" && it.key() != "padding")
-        throw InputError(c.Where() + ": unknown key '" + it.key() + "', expected \"source\", \"spacing\" or \"padding\"");
+        throw InputError(c.Where() + ": unknown key '" + it.key() +
+                         "', expected \"source\", \"spacing\" or \"padding\"");
     if (c.Has("source")) field.source = c["source"].String();
     if (c.Has("spacing")) field.params.spacing = c["spacing"].PositiveNumber();
     if (c.Has("padding")) field.params.padding = c["padding"].NonNegativeNumber();
@@ -202,11 +211,14 @@ ObjectModel LoadObjectUrdf(const std::string& path, const PackageMap& packages,
   std::vector<std::string> parts;
   for (const ConvexPiece& p : link.collision) {
     const std::size_t cut = p.source.find(" (component ");
-    const std::string part = cut != std::string::npos ? "components of " + fs::path(p.source.substr(0, cut)).filename().string()
-                                                      : std::string(ConvexPiece::KindName(p.kind));
+    const std::string part =
+        cut != std::string::npos
+            ? "components of " + fs::path(p.source.substr(0, cut)).filename().string()
+            : std::string(ConvexPiece::KindName(p.kind));
     if (std::find(parts.begin(), parts.end(), part) == parts.end()) parts.push_back(part);
   }
-  for (const std::string& part : parts) obj.decomposition += (obj.decomposition.empty() ? "" : ", ") + part;
+  for (const std::string& part : parts)
+    obj.decomposition += (obj.decomposition.empty() ? "" : ", ") + part;
   obj.decomposition += " (URDF collision)";
   obj.pieces = link.collision;
   obj.mass = link.mass;
@@ -226,7 +238,8 @@ ObjectModel LoadObjectUrdf(const std::string& path, const PackageMap& packages,
 
 namespace {
 
-ObjectModel Load(const std::string& path, const PackageMap& packages, const ContactFieldOptions* field) {
+ObjectModel Load(const std::string& path, const PackageMap& packages,
+                 const ContactFieldOptions* field) {
   if (!fs::is_regular_file(path)) throw InputError(path + ": object description not found");
   const std::string ext = fs::path(path).extension().string();
   if (ext == ".json") return LoadObjectJson(path, packages, field);

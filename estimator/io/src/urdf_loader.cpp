@@ -4,10 +4,10 @@
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <cmath>
 #include <functional>
 #include <mutex>
 #include <set>
@@ -33,7 +33,6 @@ void PackageMap::AddSpec(const std::string& spec) {
 namespace {
 
 constexpr int kMaxLinks = 1000;
-
 
 std::string FindPackage(const std::string& name, const fs::path& referrer_dir,
                         const PackageMap& packages) {
@@ -75,8 +74,8 @@ std::string ResolveResource(const std::string& uri, const std::string& referrer,
     if (resolved.is_relative()) resolved = referrer_dir / resolved;
   }
   if (!fs::exists(resolved))
-    throw InputError(referrer + ": file '" + uri + "' not found (resolved to " +
-                     resolved.string() + ")");
+    throw InputError(referrer + ": file '" + uri + "' not found (resolved to " + resolved.string() +
+                     ")");
   return fs::weakly_canonical(resolved).string();
 }
 
@@ -119,10 +118,11 @@ XmlFacts InspectXml(const std::string& xml, const std::string& source) {
   XmlFacts facts;
   // Sane limits: hands have tens of links; a 100,000-link chain took gigabytes and minutes.
   int links = 0;
-  for (const TiXmlElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link"))
+  for (const TiXmlElement* l = robot->FirstChildElement("link"); l;
+       l = l->NextSiblingElement("link"))
     if (++links > kMaxLinks)
-      throw InputError(source + ":" + std::to_string(l->Row()) + ": more than " + std::to_string(kMaxLinks) +
-                       " links; a hand has far fewer");
+      throw InputError(source + ":" + std::to_string(l->Row()) + ": more than " +
+                       std::to_string(kMaxLinks) + " links; a hand has far fewer");
   std::map<std::string, int> parent_of;  // child link → line of the joint that moves it
   for (const TiXmlElement* j = robot->FirstChildElement("joint"); j;
        j = j->NextSiblingElement("joint")) {
@@ -130,7 +130,8 @@ XmlFacts InspectXml(const std::string& xml, const std::string& source) {
     const char* type = j->Attribute("type");
     const std::string where = source + ":" + std::to_string(j->Row());
     if (name == nullptr) throw InputError(where + ": <joint> without a name");
-    if (type == nullptr) throw InputError(where + ": joint '" + std::string(name) + "' has no type");
+    if (type == nullptr)
+      throw InputError(where + ": joint '" + std::string(name) + "' has no type");
     const std::string t = type;
     if (t == "floating" || t == "planar")
       throw InputError(where + ": joint '" + std::string(name) + "' has type '" + t +
@@ -138,12 +139,13 @@ XmlFacts InspectXml(const std::string& xml, const std::string& source) {
     if ((t == "revolute" || t == "prismatic") && j->FirstChildElement("limit") == nullptr)
       throw InputError(where + ": " + t + " joint '" + std::string(name) +
                        "' has no <limit> (lower/upper/effort/velocity are required)");
-    if (const TiXmlElement* child = j->FirstChildElement("child"); child && child->Attribute("link")) {
+    if (const TiXmlElement* child = j->FirstChildElement("child");
+        child && child->Attribute("link")) {
       const std::string link = child->Attribute("link");
       if (parent_of.count(link))
         throw InputError(where + ": joint '" + std::string(name) + "' makes link '" + link +
-                         "' the child of a second joint (the first at line " + std::to_string(parent_of[link]) +
-                         "); a link has one parent joint");
+                         "' the child of a second joint (the first at line " +
+                         std::to_string(parent_of[link]) + "); a link has one parent joint");
       parent_of[link] = j->Row();
     }
     facts.joint_line[name] = j->Row();
@@ -168,12 +170,14 @@ void AddCollisionGeometry(const urdf::Geometry& g, const Transform& T_LG, const 
                           MeshCache& cache, std::vector<ConvexPiece>& out) {
   const auto positive = [&](const char* what, double v) {
     if (!(v > 0.0) || !std::isfinite(v))
-      throw InputError(where + ": " + what + " is " + std::to_string(v) + ", expected a finite number > 0");
+      throw InputError(where + ": " + what + " is " + std::to_string(v) +
+                       ", expected a finite number > 0");
   };
   switch (g.type) {
     case urdf::Geometry::BOX: {
       const auto& b = static_cast<const urdf::Box&>(g);
-      positive("box size x", b.dim.x), positive("box size y", b.dim.y), positive("box size z", b.dim.z);
+      positive("box size x", b.dim.x), positive("box size y", b.dim.y),
+          positive("box size z", b.dim.z);
       out.push_back(ConvexPiece::Box(0.5 * Vec3(b.dim.x, b.dim.y, b.dim.z), T_LG));
       break;
     }
@@ -192,9 +196,9 @@ void AddCollisionGeometry(const urdf::Geometry& g, const Transform& T_LG, const 
       positive("mesh scale x", std::abs(m.scale.x)), positive("mesh scale y", std::abs(m.scale.y)),
           positive("mesh scale z", std::abs(m.scale.z));
       const std::string file = ResolveResource(m.filename, urdf_path, options.packages);
-      const auto& meshes = cache.Get(file, Vec3(m.scale.x, m.scale.y, m.scale.z),
-                                     options.collision_mesh_components ? MeshGrouping::kByPart
-                                                                       : MeshGrouping::kByMaterial);
+      const auto& meshes = cache.Get(
+          file, Vec3(m.scale.x, m.scale.y, m.scale.z),
+          options.collision_mesh_components ? MeshGrouping::kByPart : MeshGrouping::kByMaterial);
       if (options.collision_mesh_components) {
         for (ConvexPiece& piece : ComponentHulls(meshes, file)) {
           piece.Apply(T_LG);
@@ -255,10 +259,10 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
     urdf = urdf::parseURDF(urdf_xml);
     console_bridge::restorePreviousOutputHandler();
     if (!urdf)
-      throw InputError(source + ": invalid URDF (" +
-                       (capture.messages.empty() ? std::string("urdfdom gave no reason")
-                                                 : capture.messages) +
-                       ")");
+      throw InputError(
+          source + ": invalid URDF (" +
+          (capture.messages.empty() ? std::string("urdfdom gave no reason") : capture.messages) +
+          ")");
   }
   // Paths inside resolve against the URDF's folder: ResolveResource takes the referrer file.
   const std::string referrer = (fs::path(base_dir) / fs::path(source).filename()).string();
@@ -269,19 +273,22 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
 
   // Links in a depth-first order from the root, children by the joints' document order.
   std::map<std::string, int> doc_index;
-  for (std::size_t i = 0; i < facts.joint_order.size(); ++i) doc_index[facts.joint_order[i]] = static_cast<int>(i);
+  for (std::size_t i = 0; i < facts.joint_order.size(); ++i)
+    doc_index[facts.joint_order[i]] = static_cast<int>(i);
   const urdf::LinkConstSharedPtr root = urdf->getRoot();
   std::map<std::string, int> link_index;
   std::vector<urdf::LinkConstSharedPtr> link_order;
   std::vector<urdf::JointConstSharedPtr> joint_order;  // topological
   // Iterative (a long chain must not exhaust the stack): each stack entry is a joint whose child
   // link comes next, pushed in reverse document order so that they pop in document order.
-  const auto visit = [&](const urdf::LinkConstSharedPtr& l, std::vector<urdf::JointConstSharedPtr>& stack) {
+  const auto visit = [&](const urdf::LinkConstSharedPtr& l,
+                         std::vector<urdf::JointConstSharedPtr>& stack) {
     link_index[l->name] = static_cast<int>(link_order.size());
     link_order.push_back(l);
     std::vector<urdf::JointConstSharedPtr> children(l->child_joints.begin(), l->child_joints.end());
-    std::sort(children.begin(), children.end(),
-              [&](const auto& a, const auto& b) { return doc_index[a->name] > doc_index[b->name]; });
+    std::sort(children.begin(), children.end(), [&](const auto& a, const auto& b) {
+      return doc_index[a->name] > doc_index[b->name];
+    });
     stack.insert(stack.end(), children.begin(), children.end());
   };
   std::vector<urdf::JointConstSharedPtr> stack;
@@ -298,13 +305,16 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
   for (const auto& ul : link_order) {
     auto note_mesh = [&](const urdf::GeometrySharedPtr& g) {
       if (!g || g->type != urdf::Geometry::MESH) return;
-      const std::string file = ResolveResource(static_cast<const urdf::Mesh&>(*g).filename,
-                                               referrer, options.packages);
-      if (std::find(model.mesh_files.begin(), model.mesh_files.end(), file) == model.mesh_files.end())
+      const std::string file =
+          ResolveResource(static_cast<const urdf::Mesh&>(*g).filename, referrer, options.packages);
+      if (std::find(model.mesh_files.begin(), model.mesh_files.end(), file) ==
+          model.mesh_files.end())
         model.mesh_files.push_back(file);
     };
-    for (const auto& v : ul->visual_array) if (v) note_mesh(v->geometry);
-    for (const auto& c : ul->collision_array) if (c) note_mesh(c->geometry);
+    for (const auto& v : ul->visual_array)
+      if (v) note_mesh(v->geometry);
+    for (const auto& c : ul->collision_array)
+      if (c) note_mesh(c->geometry);
     Link link;
     link.name = ul->name;
     if (ul->inertial) link.mass = ul->inertial->mass;
@@ -344,7 +354,8 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
     }
     if (link.collision.empty() && !ul->visual_array.empty() && options.load_visual_meshes) {
       std::vector<Vec3> points;
-      for (const TriangleMesh& m : link.visual) points.insert(points.end(), m.vertices.begin(), m.vertices.end());
+      for (const TriangleMesh& m : link.visual)
+        points.insert(points.end(), m.vertices.begin(), m.vertices.end());
       if (points.size() >= 4) {
         link.collision.push_back(ComputeConvexHull(points, where + " (hull of visual)"));
         link.collision_from_visual = true;
@@ -361,20 +372,31 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
     joint.child_link = link_index.at(uj->child_link_name);
     joint.T_LJ = ToTransform(uj->parent_to_joint_origin_transform);
     const std::string where =
-        source + ":" + std::to_string(facts.joint_line.count(uj->name) ? facts.joint_line.at(uj->name) : 0) +
+        source + ":" +
+        std::to_string(facts.joint_line.count(uj->name) ? facts.joint_line.at(uj->name) : 0) +
         ": joint '" + uj->name + "'";
     switch (uj->type) {
-      case urdf::Joint::REVOLUTE: joint.type = JointType::kRevolute; break;
-      case urdf::Joint::CONTINUOUS: joint.type = JointType::kContinuous; break;
-      case urdf::Joint::PRISMATIC: joint.type = JointType::kPrismatic; break;
-      case urdf::Joint::FIXED: joint.type = JointType::kFixed; break;
-      default: throw InputError(where + ": unsupported joint type");
+      case urdf::Joint::REVOLUTE:
+        joint.type = JointType::kRevolute;
+        break;
+      case urdf::Joint::CONTINUOUS:
+        joint.type = JointType::kContinuous;
+        break;
+      case urdf::Joint::PRISMATIC:
+        joint.type = JointType::kPrismatic;
+        break;
+      case urdf::Joint::FIXED:
+        joint.type = JointType::kFixed;
+        break;
+      default:
+        throw InputError(where + ": unsupported joint type");
     }
     if (joint.moves()) {
       const Vec3 axis(uj->axis.x, uj->axis.y, uj->axis.z);
       if (!(axis.norm() > 1e-12) || !axis.allFinite())
-        throw InputError(where + ": axis (" + std::to_string(axis.x()) + " " + std::to_string(axis.y()) +
-                         " " + std::to_string(axis.z()) + ") has no direction");
+        throw InputError(where + ": axis (" + std::to_string(axis.x()) + " " +
+                         std::to_string(axis.y()) + " " + std::to_string(axis.z()) +
+                         ") has no direction");
       joint.axis = axis.normalized();  // urdfdom does not normalise
     }
     if (uj->limits && joint.type != JointType::kContinuous && joint.moves()) {
@@ -419,12 +441,14 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
     for (;;) {
       auto it = joint_index.find(target);
       if (it == joint_index.end())
-        throw InputError(source + ": joint '" + joint.name + "' mimics unknown joint '" + target + "'");
+        throw InputError(source + ": joint '" + joint.name + "' mimics unknown joint '" + target +
+                         "'");
       if (!seen.insert(target).second)
         throw InputError(source + ": joint '" + joint.name + "' is part of a mimic cycle");
       const Joint& src = model.joints[it->second];
       if (!src.moves())
-        throw InputError(source + ": joint '" + joint.name + "' mimics fixed joint '" + target + "'");
+        throw InputError(source + ": joint '" + joint.name + "' mimics fixed joint '" + target +
+                         "'");
       if (!src.is_mimic) {
         joint.q_index = src.q_index;
         break;
@@ -441,7 +465,8 @@ HandModel ParseHandModel(const std::string& urdf_xml, const std::string& base_di
   model.support.resize(model.links.size());
   for (std::size_t l = 0; l < model.links.size(); ++l) {
     std::vector<int> chain;
-    for (int j = model.links[l].parent_joint; j >= 0; j = model.links[model.joints[j].parent_link].parent_joint)
+    for (int j = model.links[l].parent_joint; j >= 0;
+         j = model.links[model.joints[j].parent_link].parent_joint)
       if (model.joints[j].moves()) chain.push_back(j);
     model.support[l].assign(chain.rbegin(), chain.rend());
   }

@@ -15,7 +15,8 @@ namespace {
 // allocated.
 class CdrReader {
  public:
-  CdrReader(const std::uint8_t* data, std::size_t size, const std::string& context, bool ros1) : ros1_(ros1), context_(context) {
+  CdrReader(const std::uint8_t* data, std::size_t size, const std::string& context, bool ros1)
+      : ros1_(ros1), context_(context) {
     if (ros1) {
       p_ = data;
       n_ = size;
@@ -23,7 +24,9 @@ class CdrReader {
     }
     if (size < 4) Fail("shorter than the 4-byte CDR encapsulation header");
     // Encapsulation kinds: 0x0000 CDR big endian, 0x0001 CDR little endian (ROS 2's XCDR1).
-    if (data[0] != 0 || data[1] > 1) Fail("unsupported CDR encapsulation " + std::to_string(data[0]) + "," + std::to_string(data[1]) + " (expected CDR_LE or CDR_BE)");
+    if (data[0] != 0 || data[1] > 1)
+      Fail("unsupported CDR encapsulation " + std::to_string(data[0]) + "," +
+           std::to_string(data[1]) + " (expected CDR_LE or CDR_BE)");
     little_ = data[1] == 1;
     p_ = data + 4;
     n_ = size - 4;
@@ -49,13 +52,16 @@ class CdrReader {
     const std::uint32_t len = U32();  // CDR: including the terminating NUL
     Need(len);
     std::string s;
-    if (len > 0) s.assign(reinterpret_cast<const char*>(p_ + pos_), len - (!ros1_ && p_[pos_ + len - 1] == 0 ? 1 : 0));
+    if (len > 0)
+      s.assign(reinterpret_cast<const char*>(p_ + pos_),
+               len - (!ros1_ && p_[pos_ + len - 1] == 0 ? 1 : 0));
     pos_ += len;
     return s;
   }
   std::uint32_t Count(std::size_t min_element_size) {
     const std::uint32_t c = U32();
-    if (static_cast<std::uint64_t>(c) * min_element_size > n_ - pos_) Fail("sequence of " + std::to_string(c) + " elements runs past the end");
+    if (static_cast<std::uint64_t>(c) * min_element_size > n_ - pos_)
+      Fail("sequence of " + std::to_string(c) + " elements runs past the end");
     return c;
   }
   std::vector<double> DoubleSeq() {
@@ -74,7 +80,8 @@ class CdrReader {
     if (ros1_) U32();  // seq
     const std::int64_t sec = ros1_ ? std::int64_t{U32()} : std::int64_t{Prim<std::int32_t>()};
     const std::uint32_t nsec = U32();
-    if (nsec >= 1000000000u) Fail("header stamp has " + std::to_string(nsec) + " nanoseconds (expected < 1e9)");
+    if (nsec >= 1000000000u)
+      Fail("header stamp has " + std::to_string(nsec) + " nanoseconds (expected < 1e9)");
     h.stamp_ns = sec * 1000000000LL + nsec;
     h.frame_id = String();
     return h;
@@ -91,14 +98,18 @@ class CdrReader {
     const Vec3 t = Vector3();
     return {t, Quaternion()};
   }
-  [[noreturn]] void Fail(const std::string& what) const { throw InputError(context_ + ": " + what); }
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw InputError(context_ + ": " + what);
+  }
 
  private:
   void Align(std::size_t a) {
     if (!ros1_) pos_ = (pos_ + a - 1) / a * a;
   }
   void Need(std::size_t k) const {
-    if (pos_ > n_ || k > n_ - pos_) Fail(std::string("truncated ") + (ros1_ ? "message" : "CDR data") + " (" + std::to_string(n_) + " bytes)");
+    if (pos_ > n_ || k > n_ - pos_)
+      Fail(std::string("truncated ") + (ros1_ ? "message" : "CDR data") + " (" +
+           std::to_string(n_) + " bytes)");
   }
   const std::uint8_t* p_ = nullptr;
   std::size_t n_ = 0, pos_ = 0;
@@ -109,7 +120,8 @@ class CdrReader {
 
 }  // namespace
 
-Payload Decode(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context, bool ros1) {
+Payload Decode(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images,
+               const std::string& context, bool ros1) {
   CdrReader r(data, size, context, ros1);
   switch (type) {
     case MsgType::kJointState: {
@@ -190,11 +202,13 @@ Payload Decode(MsgType type, const std::uint8_t* data, std::size_t size, bool de
   return std::monostate();
 }
 
-Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context) {
+Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images,
+                  const std::string& context) {
   return Decode(type, data, size, decode_images, context, false);
 }
 
-Payload DecodeRos1(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context) {
+Payload DecodeRos1(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images,
+                   const std::string& context) {
   return Decode(type, data, size, decode_images, context, true);
 }
 

@@ -15,10 +15,13 @@ namespace inhand::ros {
 // `context` names the message in errors ("FILE: topic /joints, message 12"). Throws
 // InputError for truncated or malformed data. Image data is skipped when `decode_images` is
 // false (stamps, sizes and encodings are still decoded).
-Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context);
+Payload DecodeCdr(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images,
+                  const std::string& context);
 // The same from ROS 1's serialisation (the message body of a bag record).
-Payload DecodeRos1(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context);
+Payload DecodeRos1(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images,
+                   const std::string& context);
 // Both, by `ros1`.
-Payload Decode(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images, const std::string& context, bool ros1);
+Payload Decode(MsgType type, const std::uint8_t* data, std::size_t size, bool decode_images,
+               const std::string& context, bool ros1);
 
 }  // namespace inhand::ros

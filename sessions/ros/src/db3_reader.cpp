@@ -27,7 +27,8 @@ class Statement {
     const int rc = sqlite3_step(stmt_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    throw InputError(path_ + ": cannot read (" + sqlite3_errstr(rc) + "; truncated or corrupt database?)");
+    throw InputError(path_ + ": cannot read (" + sqlite3_errstr(rc) +
+                     "; truncated or corrupt database?)");
   }
   sqlite3_stmt* get() const { return stmt_; }
   std::string Text(int col) const {
@@ -47,7 +48,9 @@ class Db3Recording final : public Recording {
     sqlite3* db = nullptr;
     const int rc = sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
     db_.reset(db);  // closed also when this constructor throws below (the fuzzer found the leak)
-    if (rc != SQLITE_OK) throw InputError(path + ": cannot open as sqlite3 (" + (db != nullptr ? sqlite3_errmsg(db) : "out of memory") + ")");
+    if (rc != SQLITE_OK)
+      throw InputError(path + ": cannot open as sqlite3 (" +
+                       (db != nullptr ? sqlite3_errmsg(db) : "out of memory") + ")");
     Statement s(db_.get(), "SELECT id, name, type, serialization_format FROM topics", path_);
     while (s.Step()) {
       Topic t;
@@ -64,7 +67,10 @@ class Db3Recording final : public Recording {
   std::vector<TopicInfo> Topics() override {
     std::map<std::string, TopicInfo> by_name;
     for (const auto& [id, t] : topics_) by_name[t.name] = TopicInfo{t.name, t.type, 0, 0, 0};
-    Statement s(db_.get(), "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id", path_);
+    Statement s(
+        db_.get(),
+        "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id",
+        path_);
     while (s.Step()) {
       auto it = topics_.find(sqlite3_column_int64(s.get(), 0));
       if (it == topics_.end()) continue;
@@ -78,23 +84,29 @@ class Db3Recording final : public Recording {
     return out;
   }
 
-  void Read(const std::vector<std::string>& topics, bool decode_images, const std::function<void(Message&)>& on_message,
+  void Read(const std::vector<std::string>& topics, bool decode_images,
+            const std::function<void(Message&)>& on_message,
             const std::function<void(double)>& progress) override {
     std::string ids;
     for (const auto& [id, t] : topics_)
       for (const std::string& want : topics)
         if (t.name == want) {
           if (t.msg_type != MsgType::kOther && t.format != "cdr")
-            throw InputError(path_ + ": topic " + t.name + " is serialised as '" + t.format + "', expected cdr");
+            throw InputError(path_ + ": topic " + t.name + " is serialised as '" + t.format +
+                             "', expected cdr");
           ids += (ids.empty() ? "" : ",") + std::to_string(id);
         }
     if (ids.empty()) return;
     std::int64_t total = 0;
     {
-      Statement c(db_.get(), "SELECT COUNT(*) FROM messages WHERE topic_id IN (" + ids + ")", path_);
+      Statement c(db_.get(), "SELECT COUNT(*) FROM messages WHERE topic_id IN (" + ids + ")",
+                  path_);
       if (c.Step()) total = sqlite3_column_int64(c.get(), 0);
     }
-    Statement s(db_.get(), "SELECT topic_id, timestamp, data FROM messages WHERE topic_id IN (" + ids + ") ORDER BY timestamp, id", path_);
+    Statement s(db_.get(),
+                "SELECT topic_id, timestamp, data FROM messages WHERE topic_id IN (" + ids +
+                    ") ORDER BY timestamp, id",
+                path_);
     std::map<std::int64_t, std::uint64_t> index;
     std::int64_t done = 0;
     while (s.Step()) {
@@ -105,9 +117,12 @@ class Db3Recording final : public Recording {
       m.log_ns = sqlite3_column_int64(s.get(), 1);
       const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(s.get(), 2));
       const auto size = static_cast<std::size_t>(sqlite3_column_bytes(s.get(), 2));
-      m.payload = DecodeCdr(t.msg_type, blob, size, decode_images, path_ + ": topic " + t.name + ", message " + std::to_string(index[sqlite3_column_int64(s.get(), 0)]++));
+      m.payload = DecodeCdr(t.msg_type, blob, size, decode_images,
+                            path_ + ": topic " + t.name + ", message " +
+                                std::to_string(index[sqlite3_column_int64(s.get(), 0)]++));
       on_message(m);
-      if (progress && (++done & 1023) == 0) progress(static_cast<double>(done) / static_cast<double>(total));
+      if (progress && (++done & 1023) == 0)
+        progress(static_cast<double>(done) / static_cast<double>(total));
     }
     if (progress) progress(1.0);
   }
@@ -126,6 +141,8 @@ class Db3Recording final : public Recording {
 
 }  // namespace
 
-std::unique_ptr<Recording> OpenDb3(const std::string& path) { return std::make_unique<Db3Recording>(path); }
+std::unique_ptr<Recording> OpenDb3(const std::string& path) {
+  return std::make_unique<Db3Recording>(path);
+}
 
 }  // namespace inhand::ros

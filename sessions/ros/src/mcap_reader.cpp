@@ -17,12 +17,21 @@ namespace inhand::ros {
 namespace {
 
 constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-enum Op : std::uint8_t { kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06, kDataEnd = 0x0F };
+enum Op : std::uint8_t {
+  kHeader = 0x01,
+  kFooter = 0x02,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kDataEnd = 0x0F
+};
 
 // Bounds-checked little-endian reads inside one record.
 class Cursor {
  public:
-  Cursor(const std::uint8_t* p, std::size_t n, const std::string& context) : p_(p), n_(n), context_(context) {}
+  Cursor(const std::uint8_t* p, std::size_t n, const std::string& context)
+      : p_(p), n_(n), context_(context) {}
   template <class T>
   T Int() {
     Need(sizeof(T));
@@ -48,7 +57,8 @@ class Cursor {
 
  private:
   void Need(std::size_t k) const {
-    if (k > n_ - pos_) throw InputError(context_ + ": record ends before its fields (corrupt MCAP)");
+    if (k > n_ - pos_)
+      throw InputError(context_ + ": record ends before its fields (corrupt MCAP)");
   }
   const std::uint8_t* p_;
   std::size_t n_, pos_ = 0;
@@ -68,7 +78,8 @@ class McapRecording final : public Recording {
   explicit McapRecording(const std::string& path) : file_(path) {
     path_ = path;
     const std::uint8_t* d = file_.data();
-    if (file_.size() < 8 || std::memcmp(d, kMagic, 8) != 0) throw InputError(path + ": not an MCAP file (no leading magic bytes)");
+    if (file_.size() < 8 || std::memcmp(d, kMagic, 8) != 0)
+      throw InputError(path + ": not an MCAP file (no leading magic bytes)");
   }
   std::string format() const override { return "MCAP"; }
 
@@ -91,18 +102,21 @@ class McapRecording final : public Recording {
     return out;
   }
 
-  void Read(const std::vector<std::string>& topics, bool decode_images, const std::function<void(Message&)>& on_message,
+  void Read(const std::vector<std::string>& topics, bool decode_images,
+            const std::function<void(Message&)>& on_message,
             const std::function<void(double)>& progress) override {
     Scan(topics, decode_images, &on_message, progress);
   }
 
  private:
   [[noreturn]] void Truncated(std::size_t at, const std::string& what) const {
-    throw InputError(path_ + ": truncated or corrupt MCAP at byte " + std::to_string(at) + " of " + std::to_string(file_.size()) + " (" + what + ")");
+    throw InputError(path_ + ": truncated or corrupt MCAP at byte " + std::to_string(at) + " of " +
+                     std::to_string(file_.size()) + " (" + what + ")");
   }
 
   // One pass over the data section. `on_message` null: only counts messages per channel.
-  void Scan(const std::vector<std::string>& topics, bool decode_images, const std::function<void(Message&)>* on_message,
+  void Scan(const std::vector<std::string>& topics, bool decode_images,
+            const std::function<void(Message&)>* on_message,
             const std::function<void(double)>& progress) {
     channels_.clear();
     schemas_.clear();
@@ -118,13 +132,19 @@ class McapRecording final : public Recording {
       const std::uint8_t op = d[pos];
       std::uint64_t len;
       std::memcpy(&len, d + pos + 1, 8);
-      if (len > n - pos - 9) Truncated(pos, "record 0x" + Hex(op) + " claims " + std::to_string(len) + " bytes, " + std::to_string(n - pos - 9) + " remain");
+      if (len > n - pos - 9)
+        Truncated(pos, "record 0x" + Hex(op) + " claims " + std::to_string(len) + " bytes, " +
+                           std::to_string(n - pos - 9) + " remain");
       const std::uint8_t* body = d + pos + 9;
-      if (op == kDataEnd || op == kFooter) ended = true;
-      else if (op == kChunk) Chunk(body, len, pos, decode_images, on_message);
-      else Record(op, body, len, pos, decode_images, on_message);
+      if (op == kDataEnd || op == kFooter)
+        ended = true;
+      else if (op == kChunk)
+        Chunk(body, len, pos, decode_images, on_message);
+      else
+        Record(op, body, len, pos, decode_images, on_message);
       pos += 9 + len;
-      if (progress && pos - last_progress > (1u << 22)) progress(static_cast<double>(pos) / static_cast<double>(n)), last_progress = pos;
+      if (progress && pos - last_progress > (1u << 22))
+        progress(static_cast<double>(pos) / static_cast<double>(n)), last_progress = pos;
     }
     if (progress) progress(1.0);
   }
@@ -134,7 +154,8 @@ class McapRecording final : public Recording {
     return std::string{digits[v >> 4], digits[v & 15]};
   }
 
-  void Chunk(const std::uint8_t* body, std::uint64_t len, std::size_t at, bool decode_images, const std::function<void(Message&)>* on_message) {
+  void Chunk(const std::uint8_t* body, std::uint64_t len, std::size_t at, bool decode_images,
+             const std::function<void(Message&)>* on_message) {
     const std::string context = path_ + ": chunk at byte " + std::to_string(at);
     Cursor c(body, len, context);
     c.Int<std::uint64_t>();  // message start time
@@ -143,44 +164,55 @@ class McapRecording final : public Recording {
     c.Int<std::uint32_t>();  // uncompressed CRC (0: not computed)
     const std::string compression = c.String();
     const std::uint64_t size = c.Int<std::uint64_t>();
-    if (size > c.remaining()) throw InputError(context + ": records run past the chunk (corrupt MCAP)");
+    if (size > c.remaining())
+      throw InputError(context + ": records run past the chunk (corrupt MCAP)");
     const std::uint8_t* records = c.Bytes(size);
     const std::uint8_t* plain = records;
     if (compression.empty()) {
-      if (uncompressed != size) throw InputError(context + ": uncompressed size " + std::to_string(uncompressed) + " differs from the records' " + std::to_string(size));
+      if (uncompressed != size)
+        throw InputError(context + ": uncompressed size " + std::to_string(uncompressed) +
+                         " differs from the records' " + std::to_string(size));
     } else {
       // Recorders write chunks of a few megabytes; a gigabyte is a corrupt size field.
       if (uncompressed > (std::uint64_t{1} << 30))
-        throw InputError(context + ": implausible uncompressed size " + std::to_string(uncompressed) + " (corrupt MCAP?)");
+        throw InputError(context + ": implausible uncompressed size " +
+                         std::to_string(uncompressed) + " (corrupt MCAP?)");
       buffer_.resize(uncompressed);
       if (compression == "zstd") {
         const std::size_t got = ZSTD_decompress(buffer_.data(), uncompressed, records, size);
         if (ZSTD_isError(got) || got != uncompressed)
-          throw InputError(context + ": zstd data does not decompress to its " + std::to_string(uncompressed) + " bytes" +
-                           (ZSTD_isError(got) ? std::string(" (") + ZSTD_getErrorName(got) + ")" : ""));
+          throw InputError(
+              context + ": zstd data does not decompress to its " + std::to_string(uncompressed) +
+              " bytes" +
+              (ZSTD_isError(got) ? std::string(" (") + ZSTD_getErrorName(got) + ")" : ""));
       } else if (compression == "lz4") {
         Lz4(records, size, uncompressed, context);
       } else {
-        throw InputError(context + ": unsupported chunk compression '" + compression + "' (expected none, zstd or lz4)");
+        throw InputError(context + ": unsupported chunk compression '" + compression +
+                         "' (expected none, zstd or lz4)");
       }
       plain = buffer_.data();
     }
     // The records inside; the buffer is not touched again until they are done.
     std::size_t pos = 0;
     while (pos < uncompressed) {
-      if (uncompressed - pos < 9) throw InputError(context + ": a record header inside the chunk is cut off");
+      if (uncompressed - pos < 9)
+        throw InputError(context + ": a record header inside the chunk is cut off");
       const std::uint8_t op = plain[pos];
       std::uint64_t rlen;
       std::memcpy(&rlen, plain + pos + 1, 8);
-      if (rlen > uncompressed - pos - 9) throw InputError(context + ": a record inside the chunk runs past its end");
+      if (rlen > uncompressed - pos - 9)
+        throw InputError(context + ": a record inside the chunk runs past its end");
       Record(op, plain + pos + 9, rlen, at, decode_images, on_message);
       pos += 9 + rlen;
     }
   }
 
-  void Lz4(const std::uint8_t* src, std::size_t size, std::size_t uncompressed, const std::string& context) {
+  void Lz4(const std::uint8_t* src, std::size_t size, std::size_t uncompressed,
+           const std::string& context) {
     LZ4F_dctx* dctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&dctx, LZ4F_VERSION))) throw InputError(context + ": cannot create an lz4 context");
+    if (LZ4F_isError(LZ4F_createDecompressionContext(&dctx, LZ4F_VERSION)))
+      throw InputError(context + ": cannot create an lz4 context");
     std::size_t in_done = 0, out_done = 0;
     std::size_t hint = 1;
     while (hint != 0 && in_done < size) {
@@ -197,11 +229,12 @@ class McapRecording final : public Recording {
     }
     LZ4F_freeDecompressionContext(dctx);
     if (out_done != uncompressed || hint != 0)
-      throw InputError(context + ": lz4 data decompresses to " + std::to_string(out_done) + " bytes, the chunk says " + std::to_string(uncompressed));
+      throw InputError(context + ": lz4 data decompresses to " + std::to_string(out_done) +
+                       " bytes, the chunk says " + std::to_string(uncompressed));
   }
 
-  void Record(std::uint8_t op, const std::uint8_t* body, std::uint64_t len, std::size_t at, bool decode_images,
-              const std::function<void(Message&)>* on_message) {
+  void Record(std::uint8_t op, const std::uint8_t* body, std::uint64_t len, std::size_t at,
+              bool decode_images, const std::function<void(Message&)>* on_message) {
     if (op == kSchema) {
       const std::string context = path_ + ": schema record at byte " + std::to_string(at);
       Cursor c(body, len, context);
@@ -219,16 +252,22 @@ class McapRecording final : public Recording {
       auto s = schemas_.find(schema);
       ch.type = NormaliseTypeName(s == schemas_.end() ? std::string("(no schema)") : s->second);
       ch.msg_type = MsgTypeOf(ch.type);
-      ch.wanted = wanted_.empty() ? false : std::find(wanted_.begin(), wanted_.end(), ch.topic) != wanted_.end();
+      ch.wanted = wanted_.empty()
+                      ? false
+                      : std::find(wanted_.begin(), wanted_.end(), ch.topic) != wanted_.end();
       channels_[id] = ch;
     } else if (op == kMessage) {
-      if (len < 22) throw InputError(path_ + ": message record at byte " + std::to_string(at) + " is shorter than its fields (corrupt MCAP)");
+      if (len < 22)
+        throw InputError(path_ + ": message record at byte " + std::to_string(at) +
+                         " is shorter than its fields (corrupt MCAP)");
       std::uint16_t id;
       std::uint64_t log;
       std::memcpy(&id, body, 2);
       std::memcpy(&log, body + 6, 8);
       auto it = channels_.find(id);
-      if (it == channels_.end()) throw InputError(path_ + ": message at byte " + std::to_string(at) + " on channel " + std::to_string(id) + ", which no channel record declares");
+      if (it == channels_.end())
+        throw InputError(path_ + ": message at byte " + std::to_string(at) + " on channel " +
+                         std::to_string(id) + ", which no channel record declares");
       Channel& ch = it->second;
       const auto log_ns = static_cast<std::int64_t>(log);
       ch.first = ch.count == 0 ? log_ns : std::min(ch.first, log_ns);
@@ -236,12 +275,14 @@ class McapRecording final : public Recording {
       const std::uint64_t index = ch.count++;
       if (on_message == nullptr || !ch.wanted) return;
       if (ch.msg_type != MsgType::kOther && ch.encoding != "cdr")
-        throw InputError(path_ + ": topic " + ch.topic + " is encoded as '" + ch.encoding + "', expected cdr (ROS 2)");
+        throw InputError(path_ + ": topic " + ch.topic + " is encoded as '" + ch.encoding +
+                         "', expected cdr (ROS 2)");
       Message m;
       m.topic = &ch.topic;
       m.type = &ch.type;
       m.log_ns = log_ns;
-      m.payload = DecodeCdr(ch.msg_type, body + 22, len - 22, decode_images, path_ + ": topic " + ch.topic + ", message " + std::to_string(index));
+      m.payload = DecodeCdr(ch.msg_type, body + 22, len - 22, decode_images,
+                            path_ + ": topic " + ch.topic + ", message " + std::to_string(index));
       (*on_message)(m);
     }
     // Everything else (indexes, attachments, metadata, statistics) is not needed.
@@ -256,6 +297,8 @@ class McapRecording final : public Recording {
 
 }  // namespace
 
-std::unique_ptr<Recording> OpenMcap(const std::string& path) { return std::make_unique<McapRecording>(path); }
+std::unique_ptr<Recording> OpenMcap(const std::string& path) {
+  return std::make_unique<McapRecording>(path);
+}
 
 }  // namespace inhand::ros

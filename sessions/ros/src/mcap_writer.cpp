@@ -13,7 +13,8 @@ constexpr char kMagic[8] = {'\x89', 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 template <class T>
 void Int(std::string* s, T v) {
   char b[sizeof(T)];
-  for (std::size_t i = 0; i < sizeof(T); ++i) b[i] = static_cast<char>((static_cast<std::uint64_t>(v) >> (8 * i)) & 0xff);
+  for (std::size_t i = 0; i < sizeof(T); ++i)
+    b[i] = static_cast<char>((static_cast<std::uint64_t>(v) >> (8 * i)) & 0xff);
   s->append(b, sizeof(T));
 }
 void Str(std::string* s, const std::string& v) {
@@ -23,7 +24,8 @@ void Str(std::string* s, const std::string& v) {
 
 }  // namespace
 
-McapWriter::McapWriter(const std::string& path, const std::string& library) : path_(path), out_(path, std::ios::binary) {
+McapWriter::McapWriter(const std::string& path, const std::string& library)
+    : path_(path), out_(path, std::ios::binary) {
   if (!out_) throw InputError(path + ": cannot write");
   out_.write(kMagic, 8);
   offset_ = 8;
@@ -51,7 +53,8 @@ void McapWriter::Put(std::uint8_t op, const std::string& body) {
   if (!out_) throw InputError(path_ + ": write failed");
 }
 
-std::uint16_t McapWriter::AddSchema(const std::string& name, const std::string& encoding, const std::string& data) {
+std::uint16_t McapWriter::AddSchema(const std::string& name, const std::string& encoding,
+                                    const std::string& data) {
   const auto id = static_cast<std::uint16_t>(schemas_.size() + 1);  // 0 means "no schema"
   std::string body;
   Int<std::uint16_t>(&body, id);
@@ -63,7 +66,8 @@ std::uint16_t McapWriter::AddSchema(const std::string& name, const std::string& 
   return id;
 }
 
-std::uint16_t McapWriter::AddChannel(const std::string& topic, std::uint16_t schema, const std::string& message_encoding) {
+std::uint16_t McapWriter::AddChannel(const std::string& topic, std::uint16_t schema,
+                                     const std::string& message_encoding) {
   const auto id = static_cast<std::uint16_t>(channels_.size());
   std::string body;
   Int<std::uint16_t>(&body, id);

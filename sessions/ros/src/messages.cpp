@@ -30,7 +30,8 @@ Quat MessageQuaternion(double w, double x, double y, double z, const std::string
   const double n = std::sqrt(w * w + x * x + y * y + z * z);
   if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3) {
     std::ostringstream s;
-    s << context << ": quaternion (w " << w << ", x " << x << ", y " << y << ", z " << z << ") is not a unit quaternion";
+    s << context << ": quaternion (w " << w << ", x " << x << ", y " << y << ", z " << z
+      << ") is not a unit quaternion";
     throw InputError(s.str());
   }
   // Unit to rounding: kept bit-identical (a round trip through a recording is exact).

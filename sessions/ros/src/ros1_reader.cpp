@@ -16,8 +16,8 @@
 #include <set>
 
 #include "cdr.hpp"
-#include "mapped_file.hpp"
 #include "inhand/core/error.hpp"
+#include "mapped_file.hpp"
 #include "recordings.hpp"
 
 namespace inhand::ros {
@@ -28,26 +28,37 @@ namespace {
 // connection declares the same type name with another definition is refused, not misread.
 const char* StandardMd5(MsgType type) {
   switch (type) {
-    case MsgType::kJointState: return ::ros::message_traits::MD5Sum<sensor_msgs::JointState>::value();
-    case MsgType::kImage: return ::ros::message_traits::MD5Sum<sensor_msgs::Image>::value();
-    case MsgType::kCompressedImage: return ::ros::message_traits::MD5Sum<sensor_msgs::CompressedImage>::value();
-    case MsgType::kCameraInfo: return ::ros::message_traits::MD5Sum<sensor_msgs::CameraInfo>::value();
-    case MsgType::kTf: return ::ros::message_traits::MD5Sum<tf2_msgs::TFMessage>::value();
-    case MsgType::kPoseStamped: return ::ros::message_traits::MD5Sum<geometry_msgs::PoseStamped>::value();
-    case MsgType::kTransformStamped: return ::ros::message_traits::MD5Sum<geometry_msgs::TransformStamped>::value();
-    case MsgType::kOdometry: return ::ros::message_traits::MD5Sum<nav_msgs::Odometry>::value();
-    case MsgType::kOther: break;
+    case MsgType::kJointState:
+      return ::ros::message_traits::MD5Sum<sensor_msgs::JointState>::value();
+    case MsgType::kImage:
+      return ::ros::message_traits::MD5Sum<sensor_msgs::Image>::value();
+    case MsgType::kCompressedImage:
+      return ::ros::message_traits::MD5Sum<sensor_msgs::CompressedImage>::value();
+    case MsgType::kCameraInfo:
+      return ::ros::message_traits::MD5Sum<sensor_msgs::CameraInfo>::value();
+    case MsgType::kTf:
+      return ::ros::message_traits::MD5Sum<tf2_msgs::TFMessage>::value();
+    case MsgType::kPoseStamped:
+      return ::ros::message_traits::MD5Sum<geometry_msgs::PoseStamped>::value();
+    case MsgType::kTransformStamped:
+      return ::ros::message_traits::MD5Sum<geometry_msgs::TransformStamped>::value();
+    case MsgType::kOdometry:
+      return ::ros::message_traits::MD5Sum<nav_msgs::Odometry>::value();
+    case MsgType::kOther:
+      break;
   }
   return "*";
 }
 
 // rosbag reads the container (chunks, compression, index); the message body is decoded by our
 // bounds-checked reader (cdr.hpp), the same for ROS 1 and ROS 2.
-Payload Decode(const rosbag::MessageInstance& mi, MsgType type, bool decode_images, const std::string& context, std::vector<std::uint8_t>* buffer) {
+Payload Decode(const rosbag::MessageInstance& mi, MsgType type, bool decode_images,
+               const std::string& context, std::vector<std::uint8_t>* buffer) {
   if (type == MsgType::kOther) return std::monostate();
   const char* md5 = StandardMd5(type);
   if (mi.getMD5Sum() != md5 && mi.getMD5Sum() != "*")
-    throw InputError(context + ": " + mi.getDataType() + " with another definition (md5 " + mi.getMD5Sum() + ", the standard one is " + md5 + ")");
+    throw InputError(context + ": " + mi.getDataType() + " with another definition (md5 " +
+                     mi.getMD5Sum() + ", the standard one is " + md5 + ")");
   buffer->resize(mi.size());
   ::ros::serialization::OStream out(buffer->data(), static_cast<std::uint32_t>(buffer->size()));
   mi.write(out);
@@ -62,10 +73,14 @@ Payload Decode(const rosbag::MessageInstance& mi, MsgType type, bool decode_imag
 // uncompressed chunks hold records of the same form. Checked: every length fits, every field has
 // its '=', index entries point at message records of the chunk before them, chunk infos at
 // chunks, the bag header's index_pos at a record. (Inside compressed chunks rosbag is on its own.)
-std::uint32_t Le32(const std::uint8_t* p) { return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 | std::uint32_t{p[3]} << 24; }
+std::uint32_t Le32(const std::uint8_t* p) {
+  return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 |
+         std::uint32_t{p[3]} << 24;
+}
 std::uint64_t Le64(const std::string& v) {
   std::uint64_t x = 0;
-  for (std::size_t i = 0; i < 8 && i < v.size(); ++i) x |= std::uint64_t{static_cast<std::uint8_t>(v[i])} << (8 * i);
+  for (std::size_t i = 0; i < 8 && i < v.size(); ++i)
+    x |= std::uint64_t{static_cast<std::uint8_t>(v[i])} << (8 * i);
   return v.size() == 8 ? x : ~std::uint64_t{0};
 }
 
@@ -77,21 +92,26 @@ struct BagLayout {
   std::vector<std::pair<std::size_t, std::uint64_t>> chunk_infos;  // (at, chunk_pos)
 };
 
-void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n, std::size_t base, BagLayout* top, std::set<std::uint32_t>* messages) {
+void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n, std::size_t base,
+                  BagLayout* top, std::set<std::uint32_t>* messages) {
   std::size_t pos = 0;
   const auto fail = [&](std::size_t at, const std::string& what) {
-    throw InputError(path + ": corrupt ROS 1 bag at byte " + std::to_string(base + at) + " (" + what + ")");
+    throw InputError(path + ": corrupt ROS 1 bag at byte " + std::to_string(base + at) + " (" +
+                     what + ")");
   };
   while (pos < n) {
     if (n - pos < 4) fail(pos, "a record is cut off");
     const std::uint32_t header_len = Le32(d + pos);
-    if (header_len > n - pos - 4) fail(pos, "a record header of " + std::to_string(header_len) + " bytes runs past the end");
+    if (header_len > n - pos - 4)
+      fail(pos, "a record header of " + std::to_string(header_len) + " bytes runs past the end");
     const std::uint8_t* h = d + pos + 4;
     std::map<std::string, std::string> fields;
     for (std::size_t f = 0; f < header_len;) {
       if (header_len - f < 4) fail(pos + 4 + f, "a header field length is cut off");
       const std::uint32_t field_len = Le32(h + f);
-      if (field_len > header_len - f - 4) fail(pos + 4 + f, "a header field of " + std::to_string(field_len) + " bytes runs past its header");
+      if (field_len > header_len - f - 4)
+        fail(pos + 4 + f,
+             "a header field of " + std::to_string(field_len) + " bytes runs past its header");
       const auto* field = reinterpret_cast<const char*>(h + f + 4);
       const char* eq = static_cast<const char*>(std::memchr(field, '=', field_len));
       if (eq == nullptr) fail(pos + 4 + f, "a header field without '='");
@@ -101,7 +121,8 @@ void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n,
     const std::size_t data_at = pos + 4 + header_len;
     if (n - data_at < 4) fail(data_at, "a record's data length is cut off");
     const std::uint32_t data_len = Le32(d + data_at);
-    if (data_len > n - data_at - 4) fail(data_at, "record data of " + std::to_string(data_len) + " bytes runs past the end");
+    if (data_len > n - data_at - 4)
+      fail(data_at, "record data of " + std::to_string(data_len) + " bytes runs past the end");
     const std::string op = fields.count("op") ? fields["op"] : std::string();
     const std::uint8_t* data = d + data_at + 4;
     if (messages != nullptr) {
@@ -114,13 +135,19 @@ void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n,
         top->chunks.insert(base + pos);
         top->chunk_messages.clear();
         top->chunk_known = fields["compression"] == "none";
-        if (top->chunk_known) CheckRecords(path, data, data_len, base + data_at + 4, nullptr, &top->chunk_messages);
+        if (top->chunk_known)
+          CheckRecords(path, data, data_len, base + data_at + 4, nullptr, &top->chunk_messages);
       } else if (op == std::string(1, '\x04') && top->chunk_known) {
         const std::string& count_field = fields["count"];
-        const std::uint32_t count = count_field.size() == 4 ? Le32(reinterpret_cast<const std::uint8_t*>(count_field.data())) : ~0u;
-        if (count_field.size() != 4 || std::uint64_t{count} * 12 != data_len) fail(pos, "an index record whose count does not match its data");
+        const std::uint32_t count =
+            count_field.size() == 4
+                ? Le32(reinterpret_cast<const std::uint8_t*>(count_field.data()))
+                : ~0u;
+        if (count_field.size() != 4 || std::uint64_t{count} * 12 != data_len)
+          fail(pos, "an index record whose count does not match its data");
         for (std::uint32_t i = 0; i < count; ++i)
-          if (!top->chunk_messages.count(Le32(data + 12 * i + 8))) fail(data_at + 4 + 12 * i, "an index entry that points at no message of its chunk");
+          if (!top->chunk_messages.count(Le32(data + 12 * i + 8)))
+            fail(data_at + 4 + 12 * i, "an index entry that points at no message of its chunk");
       } else if (op == std::string(1, '\x06')) {
         top->chunk_infos.emplace_back(pos, Le64(fields["chunk_pos"]));
       }
@@ -132,14 +159,17 @@ void CheckRecords(const std::string& path, const std::uint8_t* d, std::size_t n,
 void CheckBag(const std::string& path) {
   const MappedFile file(path);
   constexpr std::size_t kMagic = 13;  // "#ROSBAG V2.0\n"
-  if (file.size() < kMagic) throw InputError(path + ": not a ROS 1 bag (shorter than its magic line)");
+  if (file.size() < kMagic)
+    throw InputError(path + ": not a ROS 1 bag (shorter than its magic line)");
   BagLayout layout;
   CheckRecords(path, file.data() + kMagic, file.size() - kMagic, kMagic, &layout, nullptr);
   if (layout.index_pos != 0 && !layout.records.count(layout.index_pos))
-    throw InputError(path + ": corrupt ROS 1 bag (its index position " + std::to_string(layout.index_pos) + " is no record)");
+    throw InputError(path + ": corrupt ROS 1 bag (its index position " +
+                     std::to_string(layout.index_pos) + " is no record)");
   for (const auto& [at, chunk_pos] : layout.chunk_infos)
     if (!layout.chunks.count(chunk_pos))
-      throw InputError(path + ": corrupt ROS 1 bag at byte " + std::to_string(kMagic + at) + " (a chunk info that points at no chunk)");
+      throw InputError(path + ": corrupt ROS 1 bag at byte " + std::to_string(kMagic + at) +
+                       " (a chunk info that points at no chunk)");
 }
 
 class Ros1Recording final : public Recording {
@@ -159,11 +189,14 @@ class Ros1Recording final : public Recording {
     std::map<std::string, TopicInfo> by_name;
     try {
       rosbag::View view(bag_);
-      for (const rosbag::ConnectionInfo* c : view.getConnections()) by_name[c->topic] = TopicInfo{c->topic, c->datatype, 0, 0, 0};
+      for (const rosbag::ConnectionInfo* c : view.getConnections())
+        by_name[c->topic] = TopicInfo{c->topic, c->datatype, 0, 0, 0};
       for (auto& [name, t] : by_name) {
         rosbag::View v(bag_, rosbag::TopicQuery(name));
         t.count = v.size();
-        if (t.count > 0) t.first_ns = static_cast<std::int64_t>(v.getBeginTime().toNSec()), t.last_ns = static_cast<std::int64_t>(v.getEndTime().toNSec());
+        if (t.count > 0)
+          t.first_ns = static_cast<std::int64_t>(v.getBeginTime().toNSec()),
+          t.last_ns = static_cast<std::int64_t>(v.getEndTime().toNSec());
       }
     } catch (const std::exception& e) {
       throw InputError(path_ + ": cannot read the bag's index (" + e.what() + ")");
@@ -173,13 +206,15 @@ class Ros1Recording final : public Recording {
     return out;
   }
 
-  void Read(const std::vector<std::string>& topics, bool decode_images, const std::function<void(Message&)>& on_message,
+  void Read(const std::vector<std::string>& topics, bool decode_images,
+            const std::function<void(Message&)>& on_message,
             const std::function<void(double)>& progress) override {
     try {
       rosbag::View view(bag_, rosbag::TopicQuery(topics));
       const std::uint32_t total = view.size();
       std::uint32_t done = 0;
-      std::map<std::string, std::pair<std::string, std::uint64_t>> seen;  // topic → normalised type, messages so far
+      std::map<std::string, std::pair<std::string, std::uint64_t>>
+          seen;                          // topic → normalised type, messages so far
       std::vector<std::uint8_t> buffer;  // one message's serialised bytes, reused
       for (const rosbag::MessageInstance& mi : view) {
         auto& [type, index] = seen[mi.getTopic()];
@@ -189,7 +224,9 @@ class Ros1Recording final : public Recording {
         m.topic = &topic_it->first;
         m.type = &type;
         m.log_ns = static_cast<std::int64_t>(mi.getTime().toNSec());
-        m.payload = Decode(mi, MsgTypeOf(type), decode_images, path_ + ": topic " + mi.getTopic() + ", message " + std::to_string(index++), &buffer);
+        m.payload = Decode(
+            mi, MsgTypeOf(type), decode_images,
+            path_ + ": topic " + mi.getTopic() + ", message " + std::to_string(index++), &buffer);
         on_message(m);
         if (progress && (++done & 1023) == 0) progress(static_cast<double>(done) / total);
       }
@@ -207,6 +244,8 @@ class Ros1Recording final : public Recording {
 
 }  // namespace
 
-std::unique_ptr<Recording> OpenRos1Bag(const std::string& path) { return std::make_unique<Ros1Recording>(path); }
+std::unique_ptr<Recording> OpenRos1Bag(const std::string& path) {
+  return std::make_unique<Ros1Recording>(path);
+}
 
 }  // namespace inhand::ros

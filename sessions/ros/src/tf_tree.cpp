@@ -7,7 +7,9 @@
 namespace inhand::ros {
 
 namespace {
-std::string Strip(const std::string& frame) { return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame; }
+std::string Strip(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
 }  // namespace
 
 void TfTree::Add(const StampedTransform& t, bool is_static) {
@@ -30,18 +32,21 @@ void TfTree::Add(const StampedTransform& t, bool is_static) {
 
 void TfTree::Finish() {
   for (auto& [child, e] : edges_)
-    std::stable_sort(e.series.begin(), e.series.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::stable_sort(e.series.begin(), e.series.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
 }
 
 std::map<std::string, TfTree::EdgeInfo> TfTree::Edges() const {
   std::map<std::string, EdgeInfo> out;
-  for (const auto& [child, e] : edges_) out[child] = {e.parent, e.is_static, e.is_static ? 1 : e.series.size()};
+  for (const auto& [child, e] : edges_)
+    out[child] = {e.parent, e.is_static, e.is_static ? 1 : e.series.size()};
   return out;
 }
 
 std::vector<std::string> TfTree::ToRoot(const std::string& frame) const {
   std::vector<std::string> chain{frame};
-  for (auto it = edges_.find(frame); it != edges_.end() && chain.size() <= edges_.size(); it = edges_.find(it->second.parent))
+  for (auto it = edges_.find(frame); it != edges_.end() && chain.size() <= edges_.size();
+       it = edges_.find(it->second.parent))
     chain.push_back(it->second.parent);
   return chain;
 }
@@ -67,36 +72,45 @@ void TfTree::RequireConnected(const std::string& a_in, const std::string& b_in) 
     }
     return out;
   };
-  throw InputError("no TF path from '" + a + "' to '" + b + "': the tree is split into {" + list(Component(a)) + "} and {" +
-                   list(Component(b)) + "}" + (edges_.empty() ? " (the recording has no /tf or /tf_static)" : ""));
+  throw InputError("no TF path from '" + a + "' to '" + b + "': the tree is split into {" +
+                   list(Component(a)) + "} and {" + list(Component(b)) + "}" +
+                   (edges_.empty() ? " (the recording has no /tf or /tf_static)" : ""));
 }
 
-std::optional<Pose> TfTree::EdgeAt(const std::string& child, const Edge& e, std::int64_t t, bool soft, std::int64_t max_ns) const {
+std::optional<Pose> TfTree::EdgeAt(const std::string& child, const Edge& e, std::int64_t t,
+                                   bool soft, std::int64_t max_ns) const {
   if (e.is_static) return e.fixed;
   const auto& s = e.series;
   const auto fail = [&](std::int64_t gap) -> std::optional<Pose> {
     if (soft) return std::nullopt;
-    throw InputError("TF " + e.parent + " -> " + child + " has no transform within " + std::to_string(max_ns / 1000000) +
-                     " ms of t = " + std::to_string(t) + " ns (nearest " + std::to_string(gap / 1000000) + " ms away)");
+    throw InputError("TF " + e.parent + " -> " + child + " has no transform within " +
+                     std::to_string(max_ns / 1000000) + " ms of t = " + std::to_string(t) +
+                     " ns (nearest " + std::to_string(gap / 1000000) + " ms away)");
   };
-  auto hi = std::lower_bound(s.begin(), s.end(), t, [](const auto& a, std::int64_t v) { return a.first < v; });
+  auto hi = std::lower_bound(s.begin(), s.end(), t,
+                             [](const auto& a, std::int64_t v) { return a.first < v; });
   if (hi != s.end() && hi->first == t) return hi->second;  // exact: no arithmetic
-  if (hi == s.begin()) return s.front().first - t <= max_ns ? std::optional<Pose>(s.front().second) : fail(s.front().first - t);
-  if (hi == s.end()) return t - s.back().first <= max_ns ? std::optional<Pose>(s.back().second) : fail(t - s.back().first);
+  if (hi == s.begin())
+    return s.front().first - t <= max_ns ? std::optional<Pose>(s.front().second)
+                                         : fail(s.front().first - t);
+  if (hi == s.end())
+    return t - s.back().first <= max_ns ? std::optional<Pose>(s.back().second)
+                                        : fail(t - s.back().first);
   const auto& lo = *(hi - 1);
   const double a = static_cast<double>(t - lo.first) / static_cast<double>(hi->first - lo.first);
   return Pose{(1 - a) * lo.second.p + a * hi->second.p, lo.second.q.slerp(a, hi->second.q)};
 }
 
-std::optional<Pose> TfTree::Lookup(const std::string& base_in, const std::string& frame_in, std::int64_t t_ns, bool soft,
-                                        std::int64_t max_ns) const {
+std::optional<Pose> TfTree::Lookup(const std::string& base_in, const std::string& frame_in,
+                                   std::int64_t t_ns, bool soft, std::int64_t max_ns) const {
   const std::string base = Strip(base_in), frame = Strip(frame_in);
   if (base == frame) return Pose();
   RequireConnected(base, frame);
   // Up from each to the common ancestor: T_base_frame = (T_root_base)^-1 T_root_frame, with the
   // shared part of the chains cancelled.
   std::vector<std::string> a = ToRoot(base), b = ToRoot(frame);
-  while (a.size() > 1 && b.size() > 1 && a[a.size() - 2] == b[b.size() - 2]) a.pop_back(), b.pop_back();
+  while (a.size() > 1 && b.size() > 1 && a[a.size() - 2] == b[b.size() - 2])
+    a.pop_back(), b.pop_back();
   // Pose of chain[0] in chain.back(); a chain of one frame is the identity (no arithmetic, so a
   // single edge comes out exactly as recorded).
   const auto up = [&](const std::vector<std::string>& chain) -> std::optional<Pose> {

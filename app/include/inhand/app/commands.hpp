@@ -13,16 +13,16 @@ struct ModelCommand {
                                       // single-link URDF without joints: a YCB object)
   std::vector<std::string> packages;  // NAME=DIR
   bool json = false;
-  bool object = false;                // load FILE as an object even if it could be a hand
-  std::string render;                 // PNG preview of the hand (or object), "" for none
+  bool object = false;  // load FILE as an object even if it could be a hand
+  std::string render;   // PNG preview of the hand (or object), "" for none
 };
 int RunModel(const ModelCommand& cmd);
 
 struct CompareCommand {
   std::string a, b;
-  int max_channel_delta = 12;         // a pixel is bad when a channel differs by more
-  double max_bad_fraction = 0.003;    // the images match when at most this fraction is bad
-  std::string diff;                   // heat map PNG, "" for none
+  int max_channel_delta = 12;       // a pixel is bad when a channel differs by more
+  double max_bad_fraction = 0.003;  // the images match when at most this fraction is bad
+  std::string diff;                 // heat map PNG, "" for none
 };
 // Exit 0 within tolerance, 1 outside, 2 on unreadable input.
 int RunCompare(const CompareCommand& cmd);
@@ -48,8 +48,8 @@ struct ImportCommand {
   std::vector<std::string> packages;  // NAME=DIR
   std::string joints, effort_is = "none", image, camera_info, palm_frame, camera_frame, object_pose;
   bool no_images = false;
-  std::string initial_pose;   // x,y,z,qw,qx,qy,qz
-  std::string initial_sigma;  // POS_M,ORIENT_RAD,BIAS_RAD
+  std::string initial_pose;     // x,y,z,qw,qx,qy,qz
+  std::string initial_sigma;    // POS_M,ORIENT_RAD,BIAS_RAD
   std::string joint_stiffness;  // K, or NAME=K,...[,*=K] [N m/rad]
   std::optional<double> start, end, time_origin;
 };
@@ -61,10 +61,10 @@ struct ReplayCommand {
   std::string modalities;  // "" = every set the session supports
   std::string params;      // TrackerParams JSON, "" = defaults
   bool no_video = false;
-  bool frames = false;     // also write each annotated frame as PNG
-  double video_fps = 30.0; // sessions without a camera: the 3-D view's frame rate
-  bool mcap = false;       // also write replay.mcap (Foxglove, Lichtblick)
-  int jobs = 2;            // threads: the sets in parallel, the pictures beside them (1: sequential)
+  bool frames = false;      // also write each annotated frame as PNG
+  double video_fps = 30.0;  // sessions without a camera: the 3-D view's frame rate
+  bool mcap = false;        // also write replay.mcap (Foxglove, Lichtblick)
+  int jobs = 2;  // threads: the sets in parallel, the pictures beside them (1: sequential)
 };
 int RunReplay(const ReplayCommand& cmd);
 
@@ -87,16 +87,16 @@ int RunMatch(const MatchCommand& cmd);
 
 struct EvaluateCommand {
   std::string out;
-  std::string scenarios;   // comma-separated, "" = all
+  std::string scenarios;  // comma-separated, "" = all
   int seeds = 5;
   int first_seed = 1;
   std::string noise = "paper";
-  int jobs = 2;            // runs in parallel (processes)
+  int jobs = 2;                             // runs in parallel (processes)
   std::string modalities = "j,jt,jta,jtf";  // the sets each run replays (j plus any of t, a, f)
-  bool plan = false;       // write plan.txt (one command line per run) and stop
-  bool merge = false;      // only build the tables and plots from existing runs
+  bool plan = false;                        // write plan.txt (one command line per run) and stop
+  bool merge = false;                       // only build the tables and plots from existing runs
   bool keep_sessions = false;
-  std::string params;      // tracker parameters (JSON) for every replay
+  std::string params;  // tracker parameters (JSON) for every replay
 };
 // Simulates and replays every scenario x seed, then writes table1.md, table1.json and one
 // Fig.-7-style plot per scenario.

@@ -18,14 +18,16 @@ struct EstimateRecord {
   double orientation_error = std::numeric_limits<double>::quiet_NaN();  // [rad]
   // The same errors per axis of the true object frame (estimate − truth), so the degrees of
   // freedom the fingers leave unobservable (along and about a bottle's axis) can be read apart.
-  Vec3 position_error_O = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());     // [m]
-  Vec3 orientation_error_O = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // [rad], R_gtᵀ R̂ = Exp(·)
+  Vec3 position_error_O = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // [m]
+  Vec3 orientation_error_O =
+      Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // [rad], R_gtᵀ R̂ = Exp(·)
   double step_time_us = 0.0;
   int constraints = 0;
   int contacts = 0;
-  int gated = 0;            // measurement blocks rejected by a gate in this sample
+  int gated = 0;                    // measurement blocks rejected by a gate in this sample
   double visual_mahalanobis = 0.0;  // mean over the features of the last visual update
-  double nees = std::numeric_limits<double>::quiet_NaN();  // 6-D pose error against P, when truth exists
+  double nees =
+      std::numeric_limits<double>::quiet_NaN();  // 6-D pose error against P, when truth exists
   double visual_ms = -1.0;  // last visual step (detection + update) when one ran at this sample
   int visual_used = 0;      // features used by it
   // What the HUD says beside the numbers (FrameComposer): the grip loosened (FilterTrace::

@@ -46,18 +46,22 @@ class FrameComposer {
   // The player's state now, at time t, with camera frame `camera_frame` (-1: none).
   static PictureState Capture(const SessionPlayer& player, int camera_frame, double t);
   Image8 Compose(const PictureState& state, const OverlayLayers& layers = {});
-  Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {}) { return Compose(Capture(p_, camera_frame, t), layers); }
+  Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {}) {
+    return Compose(Capture(p_, camera_frame, t), layers);
+  }
   // The external 3-D view (hand, every set's estimate, truth, contacts, forces and a HUD),
   // width x height pixels.
-  Image8 ComposeExternal(const PictureState& state, int width = 960, int height = 720, const OverlayLayers& layers = {});
-  Image8 ComposeExternal(double t, int width = 960, int height = 720, const OverlayLayers& layers = {}) {
+  Image8 ComposeExternal(const PictureState& state, int width = 960, int height = 720,
+                         const OverlayLayers& layers = {});
+  Image8 ComposeExternal(double t, int width = 960, int height = 720,
+                         const OverlayLayers& layers = {}) {
     return ComposeExternal(Capture(p_, -1, t), width, height, layers);
   }
   // The external 3-D view's orbit around the object (the GUI drags it).
   struct Orbit {
-    double azimuth = -2.2;   // [rad]
-    double elevation = 0.55; // [rad]
-    double distance = 0.42;  // [m]
+    double azimuth = -2.2;    // [rad]
+    double elevation = 0.55;  // [rad]
+    double distance = 0.42;   // [m]
   } orbit;
 
  private:

@@ -17,7 +17,8 @@ class SessionPlayer {
  public:
   // `sets` empty: every set the session supports (jta only when the object carries tags, jta and
   // jtf only with camera images). The session must outlive the player.
-  SessionPlayer(const Session& session, const TrackerParams& params, std::vector<ModalitySet> sets = {});
+  SessionPlayer(const Session& session, const TrackerParams& params,
+                std::vector<ModalitySet> sets = {});
   int num_samples() const { return session_.num_samples(); }
   // Feeds joint sample k to every tracker (k = 0 starts them), then the camera frames captured
   // by it.
@@ -65,7 +66,7 @@ class SessionPlayer {
   struct InputReport {
     struct Rejected {
       int sample = -1;
-      int joint = -1;     // configuration index
+      int joint = -1;  // configuration index
       bool torque = false;
       double value = 0.0;
     };
@@ -74,9 +75,11 @@ class SessionPlayer {
     double truth_from = 0.0, truth_to = 0.0;  // [s] ground truth's span (when there is truth)
     int samples_without_truth = 0;
     // One warning line each ("FILE:LINE: ..."), for stderr.
-    std::vector<std::string> Warnings(const Session& session, const SessionModels& models, const TrackerParams& params) const;
+    std::vector<std::string> Warnings(const Session& session, const SessionModels& models,
+                                      const TrackerParams& params) const;
     // "FILE:LINE: q:NAME = VALUE is ...": why a sample was rejected.
-    static std::string Describe(const Session& session, const SessionModels& models, const TrackerParams& params, const Rejected& r);
+    static std::string Describe(const Session& session, const SessionModels& models,
+                                const TrackerParams& params, const Rejected& r);
   };
   const InputReport& input_report() const { return report_; }
 
@@ -92,7 +95,8 @@ class SessionPlayer {
   void Gather(int k, Eigen::VectorXd& q, Eigen::VectorXd& tau) const;
   // Set i at sample k, then the frames [first_frame, end_frame) captured by it (their images in
   // images_); its record into r.
-  void StepSet(std::size_t i, int k, std::size_t first_frame, std::size_t end_frame, EstimateRecord& r);
+  void StepSet(std::size_t i, int k, std::size_t first_frame, std::size_t end_frame,
+               EstimateRecord& r);
   // The frames captured by sample k from state_.next_frame on, loaded into images_; advances
   // state_.next_frame, last_frame and image.
   std::size_t LoadFramesOf(int k);

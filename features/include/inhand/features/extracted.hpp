@@ -24,46 +24,46 @@
 namespace inhand {
 
 struct FeatureParams {
-  double canny_low = 40.0;           // hysteresis thresholds on the Sobel gradient magnitude
+  double canny_low = 40.0;  // hysteresis thresholds on the Sobel gradient magnitude
   double canny_high = 120.0;
-  double blur_sigma = 1.0;           // [px] Gaussian blur before Canny (noise)
-  int harris_block = 5;              // neighbourhood of the Harris matrix [px]
+  double blur_sigma = 1.0;  // [px] Gaussian blur before Canny (noise)
+  int harris_block = 5;     // neighbourhood of the Harris matrix [px]
   double harris_k = 0.04;
-  double harris_relative = 0.05;     // keep responses above this share of the image's maximum
-  int max_corners = 40;              // strongest virtual corners kept
-  double min_corner_distance = 10.0; // [px] between kept corners
-  int occluder_clearance = 8;        // [px] virtual corners this close to an occluder (a finger)
-                                     // are junctions of its edges with the object's: they move
-                                     // with the finger, not the object (they had dragged jtf
-                                     // 30-40 mm along a smooth bottle's axis)
-  int piece_radius = 14;             // [px] contour piece: edge pixels within this radius
-  int min_piece_pixels = 12;         // pieces with fewer edge pixels are rejected
-  int search_radius = 30;            // [px] local Hough search around the virtual corner
-  int max_search_radius = 90;        // [px] the tracker widens the search to 3σ of the object's
-                                     // predicted pixel while the estimate is uncertain (a start
-                                     // 40 mm off is 45 px at 0.5 m), up to this; = search_radius
-                                     // keeps it fixed
-  int global_search_radius = 0;      // [px] > 0: step 0 searches one shift of the whole object
-                                     // within this, and step 4 searches search_radius around
-                                     // it (each corner on its own within a window this wide
-                                     // matched clutter: a start 40 mm off was fused 60 mm off)
-  double global_truncation = 8.0;    // [px] step 0's chamfer: a virtual edge pixel costs its
-                                     // distance to the nearest camera edge of its orientation
-                                     // (±1 bin), at most this
-  int orientation_bins = 12;         // gradient-direction bins (mod π); neighbours may vote
-  double min_vote_fraction = 0.35;   // votes of the peak over the piece's pixels
-  double ransac_threshold = 2.5;     // [px]
+  double harris_relative = 0.05;      // keep responses above this share of the image's maximum
+  int max_corners = 40;               // strongest virtual corners kept
+  double min_corner_distance = 10.0;  // [px] between kept corners
+  int occluder_clearance = 8;         // [px] virtual corners this close to an occluder (a finger)
+                                      // are junctions of its edges with the object's: they move
+                                      // with the finger, not the object (they had dragged jtf
+                                      // 30-40 mm along a smooth bottle's axis)
+  int piece_radius = 14;              // [px] contour piece: edge pixels within this radius
+  int min_piece_pixels = 12;          // pieces with fewer edge pixels are rejected
+  int search_radius = 30;             // [px] local Hough search around the virtual corner
+  int max_search_radius = 90;         // [px] the tracker widens the search to 3σ of the object's
+                                      // predicted pixel while the estimate is uncertain (a start
+                                      // 40 mm off is 45 px at 0.5 m), up to this; = search_radius
+                                      // keeps it fixed
+  int global_search_radius = 0;       // [px] > 0: step 0 searches one shift of the whole object
+                                      // within this, and step 4 searches search_radius around
+                                      // it (each corner on its own within a window this wide
+                                      // matched clutter: a start 40 mm off was fused 60 mm off)
+  double global_truncation = 8.0;     // [px] step 0's chamfer: a virtual edge pixel costs its
+                                      // distance to the nearest camera edge of its orientation
+                                      // (±1 bin), at most this
+  int orientation_bins = 12;          // gradient-direction bins (mod π); neighbours may vote
+  double min_vote_fraction = 0.35;    // votes of the peak over the piece's pixels
+  double ransac_threshold = 2.5;      // [px]
   int ransac_iterations = 300;
   unsigned seed = 1;
-  void Validate() const;             // throws InputError naming the field
+  void Validate() const;  // throws InputError naming the field
 };
 
 struct FeatureMatch {
-  int id = -1;                 // index of the virtual corner
+  int id = -1;  // index of the virtual corner
   Vec2 virtual_px = Vec2::Zero();
   Vec2 real_px = Vec2::Zero();
   double vote_fraction = 0.0;
-  bool inlier = false;         // kept by RANSAC
+  bool inlier = false;  // kept by RANSAC
 };
 
 // What each stage produced, for `inhand match` and the GUI.
@@ -97,7 +97,8 @@ struct MatchResult {
 // tracker skips them; EdgeCorners computes them for a debug view).
 MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
                           const std::vector<std::uint8_t>* object_mask, const FeatureParams& params,
-                          const std::vector<std::uint8_t>* occluder_mask = nullptr, bool camera_corners = true);
+                          const std::vector<std::uint8_t>* occluder_mask = nullptr,
+                          bool camera_corners = true);
 
 // Harris corners of an edge image (grey, 255 on edges) as MatchFeatures finds them.
 std::vector<Vec2> EdgeCorners(const Image8& edges, const FeatureParams& params);

@@ -28,10 +28,10 @@ struct TagDetectorParams {
   std::string family = "tag36h11";  // tag36h11, tag25h9, tag16h5, tagStandard41h12, tagCircle21h7
   double decimate = 2.0;            // quad_decimate: > 1 is faster, less precise
   bool refine_edges = true;
-  double sigma = 0.0;               // [px] Gaussian blur before quad detection
+  double sigma = 0.0;  // [px] Gaussian blur before quad detection
   int threads = 1;
-  int max_hamming = 2;              // bit errors corrected (libapriltag's default)
-  double min_decision_margin = 0.0; // detections with a smaller margin are dropped
+  int max_hamming = 2;               // bit errors corrected (libapriltag's default)
+  double min_decision_margin = 0.0;  // detections with a smaller margin are dropped
   // Throws InputError naming the field.
   void Validate() const;
 };

@@ -6,10 +6,10 @@
 namespace inhand {
 
 struct ImageDiff {
-  int max_channel_delta = 0;   // over all pixels and channels, 0..255
-  double bad_fraction = 0.0;   // pixels with any channel delta > tolerance, over all pixels
+  int max_channel_delta = 0;  // over all pixels and channels, 0..255
+  double bad_fraction = 0.0;  // pixels with any channel delta > tolerance, over all pixels
   long bad_pixels = 0;
-  Image8 heatmap;              // RGB: black = equal, through red to yellow = large difference
+  Image8 heatmap;  // RGB: black = equal, through red to yellow = large difference
 };
 
 // Throws InputError when sizes or channel counts differ.

@@ -19,6 +19,7 @@ Image8 DecodeImage(const std::uint8_t* data, std::size_t size, const std::string
 // png_writer.cpp): about 2 ms for a 640x480 camera frame, within a few per cent of libpng's size.
 std::vector<std::uint8_t> EncodePng(const Image8& image);
 // The same from rows of `stride` bytes (a recorded message's buffer, without a copy).
-std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int height, int channels, std::size_t stride);
+std::vector<std::uint8_t> EncodePng(const std::uint8_t* pixels, int width, int height, int channels,
+                                    std::size_t stride);
 
 }  // namespace inhand

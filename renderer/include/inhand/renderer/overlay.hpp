@@ -27,7 +27,7 @@ constexpr Rgb kColourJointsTagsFeatures{227, 119, 194};  // jaf: pink
 constexpr Rgb kColourAll{23, 190, 207};                  // jtaf: cyan
 
 struct OverlayLayers {
-  bool silhouette = true;   // translucent fill
+  bool silhouette = true;  // translucent fill
   bool outline = true;
   bool contacts = true;
   bool forces = true;
@@ -64,14 +64,14 @@ struct OverlayEstimate {
 };
 
 struct OverlayFrame {
-  Image8 camera;                  // RGB background, the size of K
+  Image8 camera;  // RGB background, the size of K
   Transform T_PC = Transform::Identity();
   Intrinsics K;
   std::vector<OverlayEstimate> estimates;  // drawn in order; put ground truth first
   std::vector<std::string> hud;
   double friction_cone_deg = 45.0;
-  double force_scale = 0.004;     // [m/N] arrow length per newton
-  double axes_length = 0.03;      // [m]
+  double force_scale = 0.004;  // [m/N] arrow length per newton
+  double axes_length = 0.03;   // [m]
 };
 
 class OverlayPainter {
@@ -80,7 +80,8 @@ class OverlayPainter {
   OverlayPainter(Renderer& renderer, std::vector<int> object_meshes);
   Image8 Paint(const OverlayFrame& frame, const OverlayLayers& layers = {});
   // The object's silhouette mask (1 inside) at T_PO: also used for tests.
-  std::vector<std::uint8_t> Silhouette(const Transform& T_PO, const Transform& T_PC, const Intrinsics& K);
+  std::vector<std::uint8_t> Silhouette(const Transform& T_PO, const Transform& T_PC,
+                                       const Intrinsics& K);
 
  private:
   Renderer& renderer_;
@@ -94,6 +95,7 @@ class OverlayPainter {
 std::vector<std::string> WrapHudLine(const std::string& line, int max_width);
 
 // Places images side by side, scaled to the first one's height, with a caption bar each.
-Image8 SideBySide(const std::vector<const Image8*>& images, const std::vector<std::string>& captions = {});
+Image8 SideBySide(const std::vector<const Image8*>& images,
+                  const std::vector<std::string>& captions = {});
 
 }  // namespace inhand

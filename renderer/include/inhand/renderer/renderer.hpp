@@ -15,27 +15,27 @@
 namespace inhand {
 
 struct SceneItem {
-  int mesh = -1;                            // id from Renderer::AddMesh
-  Transform T_PM = Transform::Identity();   // mesh pose in the palm frame
-  std::uint16_t label = 0;                  // written to the label image (0: background)
-  std::optional<Eigen::Vector4d> rgba;      // replaces the material colour (texture kept)
-  double opacity = 1.0;                     // multiplies the material's alpha
-  bool unlit = false;                       // flat colour (silhouettes, markers)
+  int mesh = -1;                           // id from Renderer::AddMesh
+  Transform T_PM = Transform::Identity();  // mesh pose in the palm frame
+  std::uint16_t label = 0;                 // written to the label image (0: background)
+  std::optional<Eigen::Vector4d> rgba;     // replaces the material colour (texture kept)
+  double opacity = 1.0;                    // multiplies the material's alpha
+  bool unlit = false;                      // flat colour (silhouettes, markers)
 };
 
 struct Scene {
   std::vector<SceneItem> items;
-  Transform T_PC = Transform::Identity();   // camera pose in the palm frame (OpenCV axes)
+  Transform T_PC = Transform::Identity();  // camera pose in the palm frame (OpenCV axes)
   Intrinsics K;
   Eigen::Vector3d background{0.0, 0.0, 0.0};
-  double near = 0.01;                       // [m] clipping planes along the optical axis
+  double near = 0.01;  // [m] clipping planes along the optical axis
   double far = 20.0;
 };
 
 struct RenderOutput {
-  Image8 colour;                    // RGB
-  std::vector<float> depth;         // z along the optical axis [m]; +inf where nothing
-  std::vector<std::uint16_t> label; // row-major, top row first
+  Image8 colour;                     // RGB
+  std::vector<float> depth;          // z along the optical axis [m]; +inf where nothing
+  std::vector<std::uint16_t> label;  // row-major, top row first
   int width = 0, height = 0;
   float depth_at(int x, int y) const { return depth[std::size_t(y) * width + x]; }
   std::uint16_t label_at(int x, int y) const { return label[std::size_t(y) * width + x]; }

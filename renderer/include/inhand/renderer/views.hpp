@@ -48,8 +48,9 @@ void AddObject(Scene& scene, const std::vector<int>& meshes, const Transform& T_
 
 // The hand (links at T_PL) and the object (at T_PO) seen from a camera at T_PC: the scene as an
 // estimate believes it, e.g. the virtual image of the extracted-feature step.
-Scene CameraScene(const HandMeshes& hand, const std::vector<Transform>& T_PL, const std::vector<int>& object,
-                  const Transform& T_PO, const Transform& T_PC, const Intrinsics& K, const Vec3& background);
+Scene CameraScene(const HandMeshes& hand, const std::vector<Transform>& T_PL,
+                  const std::vector<int>& object, const Transform& T_PO, const Transform& T_PC,
+                  const Intrinsics& K, const Vec3& background);
 
 // Camera pose (OpenCV axes: z towards the target, y down on screen) looking from eye at
 // target, with `up` pointing up on screen.

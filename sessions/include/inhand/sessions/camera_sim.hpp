@@ -15,10 +15,10 @@ namespace inhand {
 struct LightRig {
   Vec3 lamp = Vec3(0.45, -0.35, 0.95);
   Vec3 lamp_target = Vec3(0.0, 0.0, 0.1);
-  Vec3 lamp_colour = Vec3(1.0, 0.92, 0.80);  // warm
-  double lamp_power = 1.15;                  // irradiance factor at the target's distance
+  Vec3 lamp_colour = Vec3(1.0, 0.92, 0.80);     // warm
+  double lamp_power = 1.15;                     // irradiance factor at the target's distance
   Vec3 fill_direction = Vec3(-0.6, -0.2, 0.5);  // towards the fill light (no shadows)
-  Vec3 fill_colour = Vec3(0.22, 0.25, 0.30);   // cool
+  Vec3 fill_colour = Vec3(0.22, 0.25, 0.30);    // cool
   Vec3 ambient = Vec3(0.10, 0.11, 0.13);
   double specular = 0.35;
   double shininess = 60.0;

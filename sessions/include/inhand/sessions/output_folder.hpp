@@ -15,11 +15,13 @@ inline constexpr const char* kOutputMarker = ".inhand-output";
 // `out` resolved (absolute; `.`, `..` and symbolic links resolved) once it is known that it may
 // be replaced. `inputs`: the files and folders the command reads. Throws InputError naming the
 // folder and why.
-std::filesystem::path CheckOutputFolder(const std::string& out, const std::vector<std::string>& inputs = {});
+std::filesystem::path CheckOutputFolder(const std::string& out,
+                                        const std::vector<std::string>& inputs = {});
 // `.NAME.tmp-PID` beside `target`, for this process; stale ones of ended processes are removed.
 std::filesystem::path PrepareStaging(const std::filesystem::path& target);
 // Writes the marker into `staging` and renames it to `target`, replacing `target` only when it
 // still may be replaced (it can have appeared meanwhile). Throws InputError.
-void CommitStaging(const std::filesystem::path& staging, const std::filesystem::path& target, const std::string& written_by);
+void CommitStaging(const std::filesystem::path& staging, const std::filesystem::path& target,
+                   const std::string& written_by);
 
 }  // namespace inhand

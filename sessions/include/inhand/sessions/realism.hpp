@@ -9,7 +9,8 @@
 //  - The hand is not its URDF: joint origins off, joints that deflect under load (the encoder
 //    reads the motor side), soft fingertip pads.
 //  - The torques are not the contact part: drifting offsets, friction and gravity residue, lag.
-//  - The camera is not our renderer (CameraSimulator, camera_sim.hpp): its own light rig with cast shadows and
+//  - The camera is not our renderer (CameraSimulator, camera_sim.hpp): its own light rig with cast
+//  shadows and
 //    specular highlights relighting the scene's albedo, exposure and white-balance drift,
 //    vignetting, lens distortion, motion blur, shot and read noise, JPEG; the session's
 //    intrinsics and distortion coefficients off from the true ones.
@@ -27,11 +28,23 @@
 namespace inhand {
 
 enum class Effect {
-  kObjectScale, kObjectTags, kObjectColour,
-  kHandGeometry, kHandDeflection, kHandPads,
-  kTorqueDrift, kTorqueResidue, kTorqueLag,
-  kCameraLight, kCameraExposure, kCameraVignetting, kCameraDistortion, kCameraMotionBlur,
-  kCameraSensorNoise, kCameraJpeg, kCameraIntrinsics,
+  kObjectScale,
+  kObjectTags,
+  kObjectColour,
+  kHandGeometry,
+  kHandDeflection,
+  kHandPads,
+  kTorqueDrift,
+  kTorqueResidue,
+  kTorqueLag,
+  kCameraLight,
+  kCameraExposure,
+  kCameraVignetting,
+  kCameraDistortion,
+  kCameraMotionBlur,
+  kCameraSensorNoise,
+  kCameraJpeg,
+  kCameraIntrinsics,
   kObjectMesh,  // after the others: each effect's random stream is seeded by its value
   kCount
 };
@@ -57,40 +70,40 @@ class Effects {
 
 struct RealismParams {
   // The object.
-  double scale_sigma = 0.005;          // per-axis relative scale error
-  double tag_position = 0.0005;        // [m] in a random direction in the tag's plane
+  double scale_sigma = 0.005;                 // per-axis relative scale error
+  double tag_position = 0.0005;               // [m] in a random direction in the tag's plane
   double tag_orientation = 1.0 * M_PI / 180;  // [rad] about a random axis
-  double colour_sigma = 0.04;          // relative gain per colour channel (material and texture)
-  double simplify_fraction = 0.4;      // the estimator's mesh: this share of the triangles,
-  double simplify_error = 0.001;       // [m] unless a collapse would move the surface further
-  double slab = 0.02;                  // [m] its own convex decomposition: slabs this thick
-  int max_slabs = 8;                   //     across each solid's longest axis, at most this many
+  double colour_sigma = 0.04;      // relative gain per colour channel (material and texture)
+  double simplify_fraction = 0.4;  // the estimator's mesh: this share of the triangles,
+  double simplify_error = 0.001;   // [m] unless a collapse would move the surface further
+  double slab = 0.02;              // [m] its own convex decomposition: slabs this thick
+  int max_slabs = 8;               //     across each solid's longest axis, at most this many
   // The hand.
   double joint_origin_sigma = 0.0003;  // [m] per axis of every joint origin (link lengths)
   double joint_stiffness = 20.0;       // [N m/rad] q_motor = q_link + tau / k, nominal (the
                                        // session's hand.joint_stiffness)
   double joint_stiffness_sigma = 0.2;  // each joint's true k: nominal · exp(σ g), g ~ N(0, 1)
-  double pad_stiffness = 20000.0;       // [N/m] fingertip pads (distal links)
-  double pad_damping = 400.0;           // [N s/m]
+  double pad_stiffness = 20000.0;      // [N/m] fingertip pads (distal links)
+  double pad_damping = 400.0;          // [N s/m]
   // The torques.
-  double drift_sigma = 0.05;           // [N m] stationary std of the offset per joint
-  double drift_time = 10.0;            // [s] its correlation time (Ornstein-Uhlenbeck)
-  double friction_residue = 0.02;      // [N m] Coulomb friction left in the estimate
-  double friction_velocity = 0.05;     // [rad/s] its smoothing (tanh(q̇ / v))
-  double gravity_residue = 0.3;        // share of the fingers' gravity torque left in it
-  double torque_lag = 0.02;            // [s] extra first-order lag of the estimate
+  double drift_sigma = 0.05;        // [N m] stationary std of the offset per joint
+  double drift_time = 10.0;         // [s] its correlation time (Ornstein-Uhlenbeck)
+  double friction_residue = 0.02;   // [N m] Coulomb friction left in the estimate
+  double friction_velocity = 0.05;  // [rad/s] its smoothing (tanh(q̇ / v))
+  double gravity_residue = 0.3;     // share of the fingers' gravity torque left in it
+  double torque_lag = 0.02;         // [s] extra first-order lag of the estimate
   // The camera.
   double intrinsics_scale_sigma = 0.005;  // relative error of the session's fx, fy
   double intrinsics_centre_sigma = 2.0;   // [px] of its cx, cy
   std::array<double, 5> distortion{-0.12, 0.05, 0.0004, -0.0003, 0.0};  // true k1 k2 p1 p2 k3
-  double distortion_error = 0.05;      // relative error of the session's coefficients
-  double exposure_sigma = 0.08;        // relative, per frame (AR(1), correlation 0.8)
-  double white_balance_sigma = 0.03;   // relative per channel, per frame (AR(1), 0.8)
-  double vignetting = 0.35;            // brightness loss at the image corners
-  double exposure_time = 0.008;        // [s] motion blur: sub-frames over this window
+  double distortion_error = 0.05;     // relative error of the session's coefficients
+  double exposure_sigma = 0.08;       // relative, per frame (AR(1), correlation 0.8)
+  double white_balance_sigma = 0.03;  // relative per channel, per frame (AR(1), 0.8)
+  double vignetting = 0.35;           // brightness loss at the image corners
+  double exposure_time = 0.008;       // [s] motion blur: sub-frames over this window
   int blur_subframes = 3;
-  double full_well = 6000.0;           // [e-] at white: shot noise sqrt(signal)
-  double read_noise = 8.0;             // [e-]
+  double full_well = 6000.0;  // [e-] at white: shot noise sqrt(signal)
+  double read_noise = 8.0;    // [e-]
   int jpeg_quality = 85;
 };
 
@@ -112,8 +125,8 @@ struct SimplifiedModel {
   std::size_t triangles_before = 0, triangles_after = 0;
   std::size_t pieces_before = 0, pieces_after = 0;
 };
-SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& object_json, const std::string& object_dir,
-                              const RealismParams& params);
+SimplifiedModel SimplifyModel(const ObjectModel& model, const std::string& object_json,
+                              const std::string& object_dir, const RealismParams& params);
 // Joint origins moved by N(0, sigma) per axis; the offsets (per joint, in its parent link's
 // frame) go to `offsets` when given.
 HandModel PerturbedHand(const HandModel& hand, double sigma, std::mt19937& rng,

@@ -23,7 +23,7 @@ struct SessionInfo {
   std::string object;                           // object description (.json or .urdf)
   // hand.joint_stiffness [N m/rad]: by joint name, or under "*" one value for every joint.
   std::map<std::string, double> joint_stiffness;
-  std::optional<Intrinsics> camera;             // absent: no images
+  std::optional<Intrinsics> camera;  // absent: no images
   Transform initial_T_PO = Transform::Identity();
   double sigma_position = 0.020;                // [m]   initial σ of the object position
   double sigma_orientation = 5.0 * M_PI / 180;  // [rad] initial σ of the object orientation
@@ -33,9 +33,9 @@ struct SessionInfo {
 };
 
 struct CameraFrame {
-  double t = 0.0;           // [s]
-  std::string image;        // relative to the session directory
-  Transform T_PC;           // camera pose in the palm frame at t
+  double t = 0.0;     // [s]
+  std::string image;  // relative to the session directory
+  Transform T_PC;     // camera pose in the palm frame at t
 };
 
 struct GroundTruthSample {
@@ -60,8 +60,12 @@ class Session {
   // Joint torques, when joints.csv has tau: columns (hands without torque sensors have none).
   bool has_torques() const { return tau_.cols() > 0; }
   Eigen::Ref<const Eigen::VectorXd> tau(int k) const { return tau_.row(k).transpose(); }
-  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& q_all() const { return q_; }
-  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& tau_all() const { return tau_; }
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& q_all() const {
+    return q_;
+  }
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>& tau_all() const {
+    return tau_;
+  }
 
   const std::vector<CameraFrame>& camera_frames() const { return frames_; }
   // Decodes frame i's image (RGB). Throws InputError when unreadable or of the wrong size.
@@ -87,13 +91,15 @@ class Session {
     double worst = 0.0;         // the sample farthest beyond its limit
     double limit = 0.0;         // the limit it passes
   };
-  std::vector<LimitViolation> LimitViolations(const HandModel& hand, const std::vector<int>& columns) const;
+  std::vector<LimitViolation> LimitViolations(const HandModel& hand,
+                                              const std::vector<int>& columns) const;
   // One warning line per such joint: "DIR/joints.csv: q:NAME beyond its upper limit L in N of M
   // samples (worst W, by D)", for the joints whose worst sample passes its limit by more than
   // the session's declared joint-bias σ (sigma_joint_bias): an encoder that is off by that much
   // reads beyond the limit when its joint rests on it (the simulator's index_flex2, 2.2° below 0
   // in the demo session), which says nothing about the recording.
-  std::vector<std::string> LimitWarnings(const HandModel& hand, const std::vector<int>& columns) const;
+  std::vector<std::string> LimitWarnings(const HandModel& hand,
+                                         const std::vector<int>& columns) const;
 
  private:
   std::string dir_;
@@ -135,7 +141,8 @@ class SessionWriter {
   // encodes frames while it reads) to images/frame_NNNNNN.EXT; the caller has checked that it
   // decodes to an image of the intrinsics' size. The pose as translation + quaternion, written
   // digit for digit (an importer passes recorded poses on).
-  void AdoptCameraFrame(double t, const std::string& file, const std::string& extension, const Vec3& p_PC, const Quat& q_PC);
+  void AdoptCameraFrame(double t, const std::string& file, const std::string& extension,
+                        const Vec3& p_PC, const Quat& q_PC);
   void AddGroundTruth(double t, const Transform& T_PO);
   void AddGroundTruth(double t, const Vec3& p_PO, const Quat& q_PO);
   // Any extra file (e.g. the simulator's true biases), relative to the session directory.

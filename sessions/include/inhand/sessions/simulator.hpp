@@ -27,7 +27,7 @@ const char* NoiseProfileName(NoiseProfile profile);
 struct ScenarioInfo {
   std::string name;
   std::string description;
-  double duration = 0.0;  // [s]
+  double duration = 0.0;    // [s]
   std::string object_file;  // the object description it simulates (assets/objects/NAME/object.json)
 };
 std::vector<ScenarioInfo> ListScenarios();
@@ -43,8 +43,8 @@ struct SimulateOptions {
   double camera_rate = 10.0;     // [Hz]
   int image_width = 640;
   int image_height = 480;
-  bool images = true;            // false: joints only (fast tests)
-  double duration_scale = 1.0;   // < 1 runs a shortened script (tests)
+  bool images = true;           // false: joints only (fast tests)
+  double duration_scale = 1.0;  // < 1 runs a shortened script (tests)
   // The realism effects (realism.hpp); unset: every effect for `realistic`, none otherwise.
   std::optional<Effects> effects;
   RealismParams realism;
@@ -54,16 +54,16 @@ Effects EffectsOf(const SimulateOptions& options);
 
 struct SimulationSummary {
   std::string session_dir;
-  double duration = 0.0;             // simulated [s]
-  double wall_time = 0.0;            // [s]
+  double duration = 0.0;   // simulated [s]
+  double wall_time = 0.0;  // [s]
   int joint_samples = 0;
   int camera_frames = 0;
-  double max_penetration = 0.0;      // [m] deepest finger/object penetration while recorded
-  double held_fraction = 0.0;        // share of samples after the grasp with >= 2 links touching
-  double tilt_in_hand_deg = 0.0;     // object rotation in the palm frame, closing start → end
+  double max_penetration = 0.0;   // [m] deepest finger/object penetration while recorded
+  double held_fraction = 0.0;     // share of samples after the grasp with >= 2 links touching
+  double tilt_in_hand_deg = 0.0;  // object rotation in the palm frame, closing start → end
   double max_in_hand_rotation_deg = 0.0;
   double table_travel_before_grasp = 0.0;  // [m] object motion on the table before closing
-  double lift_height = 0.0;          // [m] object height gain, start → end
+  double lift_height = 0.0;                // [m] object height gain, start → end
 };
 
 // Simulates `options.scenario` and writes a v1 session (atomically). Throws InputError for an

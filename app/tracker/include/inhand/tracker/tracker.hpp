@@ -39,37 +39,37 @@ namespace inhand {
 
 // Which measurements a tracker fuses besides the joint positions (always).
 struct Modalities {
-  bool torque = false;    // t: contacts confirmed by joint torques
-  bool tags = false;      // a: AprilTag corners
-  bool features = false;  // f: features extracted from the camera and the rendered image
+  bool torque = false;       // t: contacts confirmed by joint torques
+  bool tags = false;         // a: AprilTag corners
+  bool features = false;     // f: features extracted from the camera and the rendered image
   std::string Name() const;  // "j", "jt", "jta", "jtf", "ja", "jf", "jtaf", ...
 };
 
 struct TrackerOptions {
-  bool threaded = false;           // vision on a worker thread (online use)
-  double horizon = 0.5;            // [s] images captured longer ago than this before the newest
-                                   // joint sample are dropped (counted), never fused
-  int history_samples = 2048;      // joint samples kept with their checkpoints (2 s at 1 kHz)
-  int max_queued_images = 2;       // threaded: images waiting for the worker; when more arrive
-                                   // the oldest waiting one is dropped (counted)
+  bool threaded = false;       // vision on a worker thread (online use)
+  double horizon = 0.5;        // [s] images captured longer ago than this before the newest
+                               // joint sample are dropped (counted), never fused
+  int history_samples = 2048;  // joint samples kept with their checkpoints (2 s at 1 kHz)
+  int max_queued_images = 2;   // threaded: images waiting for the worker; when more arrive
+                               // the oldest waiting one is dropped (counted)
 };
 
 struct TrackerStats {
-  long samples = 0;                // joint samples fused
-  long samples_dropped = 0;        // not later than the previous one, or before the start
-  long samples_rejected = 0;       // no hand can produce them (ScreenJointSample)
+  long samples = 0;           // joint samples fused
+  long samples_dropped = 0;   // not later than the previous one, or before the start
+  long samples_rejected = 0;  // no hand can produce them (ScreenJointSample)
   long images_added = 0;
   long images_fused = 0;
-  long images_dropped_late = 0;    // captured beyond the horizon or before the first sample
-  long images_dropped_busy = 0;    // threaded: the worker was behind
-  long images_rejected = 0;        // empty, or with a time or camera pose that is not finite
-  long rewinds = 0;                // images fused before joint samples already fused
-  long samples_replayed = 0;       // joint samples re-applied after them
-  long relocalizations = 0;        // images that found a lost object again (VisualStep::relocalized)
-  long images_features_lost = 0;   // images after which the extracted features were lost
-                                   // (VisualMemory::features_lost)
-  long images_tags_elsewhere = 0;  // images whose tags put the object where the estimate cannot
-                                   // be and that did not relocate it (yet; with relocation on)
+  long images_dropped_late = 0;   // captured beyond the horizon or before the first sample
+  long images_dropped_busy = 0;   // threaded: the worker was behind
+  long images_rejected = 0;       // empty, or with a time or camera pose that is not finite
+  long rewinds = 0;               // images fused before joint samples already fused
+  long samples_replayed = 0;      // joint samples re-applied after them
+  long relocalizations = 0;       // images that found a lost object again (VisualStep::relocalized)
+  long images_features_lost = 0;  // images after which the extracted features were lost
+                                  // (VisualMemory::features_lost)
+  long images_tags_elsewhere = 0;      // images whose tags put the object where the estimate cannot
+                                       // be and that did not relocate it (yet; with relocation on)
   double last_relocalization_t = 0.0;  // [s] the last one's capture time (when relocalizations > 0)
   double last_relocalized = 0.0;       // [m] and how far from the estimate it found the object
 };
@@ -88,14 +88,14 @@ struct VisualStep {
   bool has_features = false;
   RenderOutput virtual_view;
   MatchResult match;
-  int search_radius = 0;           // [px] how far the object was searched (widened while
-                                   // uncertain; beyond FeatureParams::search_radius, match.debug
-                                   // has the global shift)
-  double relocalized = 0.0;        // [m] the object, lost for frames, was found this far from
-                                   // the estimate. Extracted features: the σ added to its
-                                   // position before the update; tags: the fit of the tags'
-                                   // corners that the object was put at (VisualUpdate::relocate)
-  std::vector<int> used_match;     // index into match.matches
+  int search_radius = 0;        // [px] how far the object was searched (widened while
+                                // uncertain; beyond FeatureParams::search_radius, match.debug
+                                // has the global shift)
+  double relocalized = 0.0;     // [m] the object, lost for frames, was found this far from
+                                // the estimate. Extracted features: the σ added to its
+                                // position before the update; tags: the fit of the tags'
+                                // corners that the object was put at (VisualUpdate::relocate)
+  std::vector<int> used_match;  // index into match.matches
   std::vector<double> residual_before, residual_after;  // [px]
 };
 
@@ -116,11 +116,12 @@ struct VisualUpdate {
 
   // Features of the image captured at t_capture by a camera at T_PC, fused after the position's
   // σ is widened by `widen_position` (none: 0).
-  static VisualUpdate Features(double t_capture, const Transform& T_PC, const Intrinsics& K, double widen_position = 0.0,
+  static VisualUpdate Features(double t_capture, const Transform& T_PC, const Intrinsics& K,
+                               double widen_position = 0.0,
                                std::vector<VisualFeature> features = {});
   // The object put at T_PO with `covariance` (Filter::Relocate).
-  static VisualUpdate Relocation(double t_capture, const Transform& T_PO, const Mat6& covariance, const Transform& T_PC,
-                                 const Intrinsics& K);
+  static VisualUpdate Relocation(double t_capture, const Transform& T_PO, const Mat6& covariance,
+                                 const Transform& T_PC, const Intrinsics& K);
 };
 
 // One joint sample as the tracker keeps it: the sample, the filter's checkpoint after its
@@ -143,9 +144,12 @@ struct VisualMemory {
   // features, once a frame had matched well; the object is then searched for as at the start.
   static constexpr int kWellMatched = 8;
   static constexpr int kLostFrames = 3;
-  bool features_lost() const { return features_matched_well && features_poor_frames >= kLostFrames; }
+  bool features_lost() const {
+    return features_matched_well && features_poor_frames >= kLostFrames;
+  }
   bool operator==(const VisualMemory& o) const {
-    return tag_disagreements == o.tag_disagreements && features_matched_well == o.features_matched_well &&
+    return tag_disagreements == o.tag_disagreements &&
+           features_matched_well == o.features_matched_well &&
            features_poor_frames == o.features_poor_frames;
   }
 };
@@ -155,10 +159,10 @@ std::ostream& operator<<(std::ostream& os, const VisualMemory& m);
 struct TrackerSnapshot {
   bool started = false;
   double t = 0.0;
-  TrackedSample last;      // the newest sample
-  FilterState filter;      // after it and its visual updates
+  TrackedSample last;  // the newest sample
+  FilterState filter;  // after it and its visual updates
   VisualStep visual;
-  VisualMemory memory;     // after its visual updates
+  VisualMemory memory;  // after its visual updates
   TrackerStats stats;
 };
 
@@ -195,7 +199,7 @@ class Tracker {
   const Eigen::VectorXd& biases() const;
   const Eigen::VectorXd& joints() const;  // the newest sample's positions as fused (undeflected,
                                           // clamped when asked); empty before the first
-  const FilterTrace& trace() const;    // of the newest joint sample (and images fused at it)
+  const FilterTrace& trace() const;       // of the newest joint sample (and images fused at it)
   const Filter& filter() const;
   const VisualStep& last_visual() const;
   VisualMemory visual_memory() const;  // after last_visual()

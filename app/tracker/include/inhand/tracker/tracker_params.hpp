@@ -15,10 +15,10 @@ namespace inhand {
 
 struct TrackerParams {
   FilterParams filter;
-  TagDetectorParams tags;          // `family` is replaced by the object's tags' family unless
+  TagDetectorParams tags;              // `family` is replaced by the object's tags' family unless
   bool tag_family_from_object = true;  // the file names one (tag_family_from_object false)
-  bool tag_fine_search = true;     // search tags the decimated detection missed at full
-                                   // resolution where the estimate expects them
+  bool tag_fine_search = true;         // search tags the decimated detection missed at full
+                                       // resolution where the estimate expects them
   // Tags whose own fit of the object's pose (every corner of the image, Gauss-Newton from each
   // tag's homography) the estimate cannot explain (χ²₆ > 99.9 % under both covariances) in this
   // many images in a row put the object where the fit says, instead of being gated corner by

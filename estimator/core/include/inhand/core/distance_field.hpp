@@ -18,18 +18,18 @@
 namespace inhand {
 
 struct DistanceFieldParams {
-  double spacing = 1e-3;         // [m] grid step; grown if the grid would exceed max_nodes
-  double padding = 0.025;        // [m] grid margin around the surface (beyond it: box distance)
-  long max_nodes = 24'000'000;   // memory bound (4 bytes per node)
+  double spacing = 1e-3;        // [m] grid step; grown if the grid would exceed max_nodes
+  double padding = 0.025;       // [m] grid margin around the surface (beyond it: box distance)
+  long max_nodes = 24'000'000;  // memory bound (4 bytes per node)
   void Validate(const std::string& where) const;
 };
 
 struct DistanceField {
-  Vec3 origin = Vec3::Zero();       // node (0, 0, 0), object frame
-  double spacing = 0.0;             // [m]
+  Vec3 origin = Vec3::Zero();                      // node (0, 0, 0), object frame
+  double spacing = 0.0;                            // [m]
   Eigen::Vector3i dims = Eigen::Vector3i::Zero();  // nodes per axis
-  std::vector<float> values;        // signed [m], x fastest, then y, then z
-  std::string source;               // "closed visual mesh (16384 triangles)", "union of 66 pieces"
+  std::vector<float> values;                       // signed [m], x fastest, then y, then z
+  std::string source;  // "closed visual mesh (16384 triangles)", "union of 66 pieces"
 
   bool empty() const { return values.empty(); }
   // Signed distance at `p_O`: trilinear inside the grid; outside it, the value at the nearest

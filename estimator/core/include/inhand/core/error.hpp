@@ -19,7 +19,7 @@ class InputError : public std::runtime_error {
 
 }  // namespace inhand
 
-#define INHAND_CHECK(cond, msg)                                      \
-  do {                                                               \
+#define INHAND_CHECK(cond, msg)                                           \
+  do {                                                                    \
     if (!(cond)) ::inhand::CheckFailed(#cond, __FILE__, __LINE__, (msg)); \
   } while (false)

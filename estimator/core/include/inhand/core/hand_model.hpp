@@ -35,23 +35,23 @@ struct Joint {
 
 struct Link {
   std::string name;
-  int parent_joint = -1;                 // -1 for the root link
-  std::vector<TriangleMesh> visual;      // in the link frame
-  std::vector<ConvexPiece> collision;    // in the link frame
-  bool visual_from_collision = false;    // fallbacks applied when an element was missing
+  int parent_joint = -1;               // -1 for the root link
+  std::vector<TriangleMesh> visual;    // in the link frame
+  std::vector<ConvexPiece> collision;  // in the link frame
+  bool visual_from_collision = false;  // fallbacks applied when an element was missing
   bool collision_from_visual = false;
-  double mass = 0.0;                     // [kg], from the URDF when given
+  double mass = 0.0;  // [kg], from the URDF when given
 };
 
 struct HandModel {
   std::string name;
-  std::string source;                    // the URDF file
-  std::vector<std::string> mesh_files;   // every mesh file it uses, resolved, first use first
+  std::string source;                   // the URDF file
+  std::vector<std::string> mesh_files;  // every mesh file it uses, resolved, first use first
   std::vector<Link> links;
-  std::vector<Joint> joints;             // topological order: a joint after its parent link's
-  std::vector<int> q_joints;             // joint index of each q entry (independent joints,
-                                         // in the URDF's document order)
-  int root_link = 0;                     // the palm frame P is this link's frame
+  std::vector<Joint> joints;  // topological order: a joint after its parent link's
+  std::vector<int> q_joints;  // joint index of each q entry (independent joints,
+                              // in the URDF's document order)
+  int root_link = 0;          // the palm frame P is this link's frame
   // Per link: the moving joints from the root to the link (root first).
   std::vector<std::vector<int>> support;
   // Per configuration entry (q order): the joint's stiffness between motor and link [N m/rad],

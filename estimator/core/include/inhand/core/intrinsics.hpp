@@ -13,12 +13,12 @@
 namespace inhand {
 
 struct Intrinsics {
-  int width = 640;   // [px]
-  int height = 480;  // [px]
-  double fx = 525.0;  // [px]
-  double fy = 525.0;  // [px]
-  double cx = 319.5;  // [px]
-  double cy = 239.5;  // [px]
+  int width = 640;                                            // [px]
+  int height = 480;                                           // [px]
+  double fx = 525.0;                                          // [px]
+  double fy = 525.0;                                          // [px]
+  double cx = 319.5;                                          // [px]
+  double cy = 239.5;                                          // [px]
   std::array<double, 5> distortion{0.0, 0.0, 0.0, 0.0, 0.0};  // k1 k2 p1 p2 k3
 
   // Throws InputError naming `context` and the field when a value is impossible.

@@ -44,17 +44,17 @@ struct TriangleMesh {
 
   std::size_t num_triangles() const { return triangles.size(); }
   Aabb Bounds() const;
-  void Apply(const Transform& T);          // moves vertices, rotates normals
-  void ScaleBy(const Vec3& scale);          // per-axis scale; normals re-normalised
-  void ComputeNormals();                    // area-weighted vertex normals
+  void Apply(const Transform& T);   // moves vertices, rotates normals
+  void ScaleBy(const Vec3& scale);  // per-axis scale; normals re-normalised
+  void ComputeNormals();            // area-weighted vertex normals
   // Checks indices, sizes and finiteness; throws InputError naming `context`.
   void Validate(const std::string& context) const;
 };
 
 // Mass properties of a solid bounded by closed, consistently oriented meshes.
 struct MassProperties {
-  double volume = 0.0;            // [m³]
-  Vec3 com = Vec3::Zero();        // centre of mass [m]
+  double volume = 0.0;              // [m³]
+  Vec3 com = Vec3::Zero();          // centre of mass [m]
   Mat3 inertia_com = Mat3::Zero();  // about the centre of mass, per unit density [m⁵]
 };
 // Divergence theorem over signed tetrahedra; exact for closed meshes.
@@ -101,7 +101,7 @@ struct ConvexPiece {
   double half_length = 0.0;                // cylinder, capsule: half of the straight segment
   std::vector<Vec3> hull_vertices;         // body frame
   std::vector<Eigen::Vector3i> hull_triangles;
-  std::string source;                      // where it came from, for messages and reports
+  std::string source;  // where it came from, for messages and reports
 
   Vec3 bounding_center = Vec3::Zero();  // body frame
   double bounding_radius = 0.0;

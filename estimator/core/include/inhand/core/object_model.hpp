@@ -24,20 +24,20 @@ struct TagPlacement {
 
 struct ObjectModel {
   std::string name;
-  std::string source;                    // description file
-  std::vector<std::string> mesh_files;   // every mesh file it uses, resolved, first use first
-  std::vector<TriangleMesh> visual;      // object frame O
-  std::vector<ConvexPiece> pieces;       // object frame O, for contacts
-  std::string decomposition;             // how pieces were obtained (for reports)
+  std::string source;                   // description file
+  std::vector<std::string> mesh_files;  // every mesh file it uses, resolved, first use first
+  std::vector<TriangleMesh> visual;     // object frame O
+  std::vector<ConvexPiece> pieces;      // object frame O, for contacts
+  std::string decomposition;            // how pieces were obtained (for reports)
   // The signed distance field of the object as a whole (contacts against the union of the
   // pieces, not against one piece). Null when contacts use the pieces directly (one convex
   // piece is exact with GJK) or when the description turns it off.
   std::shared_ptr<const DistanceField> field;
-  std::string field_cache;               // the file it was read from or written to, if any
-  double mass = 0.0;                     // [kg]
-  Vec3 com_O = Vec3::Zero();             // [m]
-  Mat3 inertia_com = Mat3::Identity();   // [kg m²] about the centre of mass, O axes
-  double friction = 0.8;                 // Coulomb coefficient against the fingers
+  std::string field_cache;              // the file it was read from or written to, if any
+  double mass = 0.0;                    // [kg]
+  Vec3 com_O = Vec3::Zero();            // [m]
+  Mat3 inertia_com = Mat3::Identity();  // [kg m²] about the centre of mass, O axes
+  double friction = 0.8;                // Coulomb coefficient against the fingers
   std::vector<TagPlacement> tags;
 
   std::size_t NumVisualTriangles() const;

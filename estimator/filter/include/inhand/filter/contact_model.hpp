@@ -51,6 +51,7 @@ Eigen::Matrix<double, 2, 6> VisualMeasurementJacobian(const Vec3& X_P, const Vec
 
 // The same pixel differentiated w.r.t. an error (v, ω) of the camera pose, T_PC_true =
 // T_PC Exp(v, ω) (the hand-eye calibration's error): X_C changes by -v + [X_C]x ω.
-Eigen::Matrix<double, 2, 6> CameraPoseJacobian(const Vec3& X_P, const Transform& T_PC, const Intrinsics& K);
+Eigen::Matrix<double, 2, 6> CameraPoseJacobian(const Vec3& X_P, const Transform& T_PC,
+                                               const Intrinsics& K);
 
 }  // namespace inhand

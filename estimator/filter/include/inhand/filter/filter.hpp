@@ -20,11 +20,11 @@
 namespace inhand {
 
 enum class ContactKind {
-  kKinematic,       // penetrating (d < 0): a zero-distance constraint
-  kTorque,          // separated, confirmed by joint torques: pulled into touch
-  kRejectedCone,    // torque candidate whose force lies outside the friction cone
-  kRejectedForce,   // torque candidate whose force is below force_min
-  kCandidate,       // near but neither penetrating nor torque-confirmed
+  kKinematic,      // penetrating (d < 0): a zero-distance constraint
+  kTorque,         // separated, confirmed by joint torques: pulled into touch
+  kRejectedCone,   // torque candidate whose force lies outside the friction cone
+  kRejectedForce,  // torque candidate whose force is below force_min
+  kCandidate,      // near but neither penetrating nor torque-confirmed
 };
 const char* ContactKindName(ContactKind kind);
 
@@ -33,15 +33,15 @@ struct FilterTrace {
   struct Contact {
     ContactKind kind = ContactKind::kCandidate;
     int link = -1;
-    int piece = -1;                 // the ContactPair's: -1 for the object as a whole
+    int piece = -1;  // the ContactPair's: -1 for the object as a whole
     int iteration = 0;
-    double distance = 0.0;          // [m] signed, before the update
+    double distance = 0.0;  // [m] signed, before the update
     Vec3 c_o_P = Vec3::Zero();
     Vec3 c_f_P = Vec3::Zero();
-    Vec3 normal_P = Vec3::Zero();   // link → object
-    Vec3 force_P = Vec3::Zero();    // λ̄: estimated force applied to the object [N]
-    double mahalanobis = 0.0;       // r S⁻¹ r of its update (constraints only)
-    bool gated = false;             // rejected by the gate
+    Vec3 normal_P = Vec3::Zero();  // link → object
+    Vec3 force_P = Vec3::Zero();   // λ̄: estimated force applied to the object [N]
+    double mahalanobis = 0.0;      // r S⁻¹ r of its update (constraints only)
+    bool gated = false;            // rejected by the gate
   };
   struct Visual {
     int id = -1;                    // caller's feature id (tag id*4+corner, match index, ...)
@@ -53,28 +53,28 @@ struct FilterTrace {
   double t = 0.0;
   std::vector<Contact> contacts;
   std::vector<Visual> visual;
-  int prediction_contacts = 0;      // contacts that moved the object in Predict
+  int prediction_contacts = 0;          // contacts that moved the object in Predict
   Vec6 predicted_twist = Vec6::Zero();  // (Δp, Δθ) of the last Predict
-  int num_constraints = 0;          // contact blocks applied
-  int num_gated = 0;                // blocks rejected by a gate
-  int numeric_events = 0;           // ill-conditioned S, non-finite inputs or results (skipped:
-                                    // nothing non-finite enters the state)
-  bool slipping = false;            // Predict grew the random walk: the grip was too weak
+  int num_constraints = 0;              // contact blocks applied
+  int num_gated = 0;                    // blocks rejected by a gate
+  int numeric_events = 0;               // ill-conditioned S, non-finite inputs or results (skipped:
+                                        // nothing non-finite enters the state)
+  bool slipping = false;                // Predict grew the random walk: the grip was too weak
   void Clear();
 };
 
 struct VisualFeature {
   int id = -1;
-  Vec3 x_O = Vec3::Zero();          // the feature's point on the object, object frame [m]
-  Vec2 pixel = Vec2::Zero();        // measured pixel, undistorted [px]
+  Vec3 x_O = Vec3::Zero();    // the feature's point on the object, object frame [m]
+  Vec2 pixel = Vec2::Zero();  // measured pixel, undistorted [px]
 };
 
 // The standard deviations the filter starts with (docs/estimator.md, "State").
 struct StartSigmas {
-  double position = 0.020;                 // [m] per axis
-  double orientation = 5.0 * M_PI / 180;   // [rad] per axis
-  double bias = 5.0 * M_PI / 180;          // [rad] every joint bias, unless bias_per_joint is set
-  Eigen::VectorXd bias_per_joint;          // [rad] one per joint (empty: `bias` for every joint)
+  double position = 0.020;                // [m] per axis
+  double orientation = 5.0 * M_PI / 180;  // [rad] per axis
+  double bias = 5.0 * M_PI / 180;         // [rad] every joint bias, unless bias_per_joint is set
+  Eigen::VectorXd bias_per_joint;         // [rad] one per joint (empty: `bias` for every joint)
   // Throws InputError("SOURCE: 'sigma_position' is V, expected ...") outside the ranges that
   // keep the filter's arithmetic finite: position [1e-6, 10] m, orientation [1e-6, 2π] rad,
   // biases [0, 2π] rad.
@@ -99,20 +99,20 @@ struct ActiveContact {
 // The error state is δ = (δp, δθ, δb[, ξ]): ξ, the camera pose's error, only when a camera σ
 // is set; P covers all of it.
 struct FilterState {
-  Vec3 p = Vec3::Zero();          // object position in the palm frame [m]
-  Mat3 R = Mat3::Identity();      // object orientation
-  Eigen::VectorXd b;              // joint biases [rad]
-  Vec6 xi = Vec6::Zero();         // camera pose error (v, ω), T_PC_true = T_PC Exp(ξ)
-  Eigen::MatrixXd P;              // covariance of δ
-  Eigen::VectorXd q_prev;         // the last measured joints
-  Eigen::VectorXd q_eff;          // q_prev + b: where the kinematics were last evaluated
+  Vec3 p = Vec3::Zero();      // object position in the palm frame [m]
+  Mat3 R = Mat3::Identity();  // object orientation
+  Eigen::VectorXd b;          // joint biases [rad]
+  Vec6 xi = Vec6::Zero();     // camera pose error (v, ω), T_PC_true = T_PC Exp(ξ)
+  Eigen::MatrixXd P;          // covariance of δ
+  Eigen::VectorXd q_prev;     // the last measured joints
+  Eigen::VectorXd q_eff;      // q_prev + b: where the kinematics were last evaluated
   bool have_prev = false;
-  double grip = 0.0;              // [N m] Σ|τ| of the last contact update
-  double max_grip = 0.0;          // [N m] its largest value since Reset
-  Eigen::VectorXd q_window;       // the joints where the current travel window began
-  double window_time = 0.0;       // [s] since then
+  double grip = 0.0;         // [N m] Σ|τ| of the last contact update
+  double max_grip = 0.0;     // [N m] its largest value since Reset
+  Eigen::VectorXd q_window;  // the joints where the current travel window began
+  double window_time = 0.0;  // [s] since then
   std::vector<ActiveContact> active;
-  FilterTrace trace;              // what the last step decided
+  FilterTrace trace;  // what the last step decided
 };
 
 class Filter {
@@ -128,7 +128,8 @@ class Filter {
   // One joint sample: Predict to q_meas over dt, then UpdateContacts with tau at the joints
   // just predicted to. The contact update reads the joints that Predict stored (FilterState::
   // q_prev), so the two belong together; a joint-rate loop calls this.
-  void Step(const Eigen::Ref<const Eigen::VectorXd>& q_meas, const Eigen::Ref<const Eigen::VectorXd>& tau, double dt);
+  void Step(const Eigen::Ref<const Eigen::VectorXd>& q_meas,
+            const Eigen::Ref<const Eigen::VectorXd>& tau, double dt);
   // The two halves of Step, for tests that look between them.
   // Moves the object with the fingers from the previous q_meas to this one over dt seconds.
   void Predict(const Eigen::Ref<const Eigen::VectorXd>& q_meas, double dt);
@@ -179,7 +180,8 @@ class Filter {
   // Joseph form; nothing is applied to the mean until Commit.
   enum class Outcome { kApplied, kGated, kNumeric };
   template <int D>
-  Outcome Update(const Eigen::Matrix<double, D, 1>& r, const Eigen::Matrix<double, D, Eigen::Dynamic>& H,
+  Outcome Update(const Eigen::Matrix<double, D, 1>& r,
+                 const Eigen::Matrix<double, D, Eigen::Dynamic>& H,
                  const Eigen::Matrix<double, D, D>& R, double gate_chi2, double* mahalanobis);
   // Applies the accumulated correction (retraction on SO(3)) and clears it.
   void Commit();
@@ -193,7 +195,8 @@ class Filter {
   void ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int iteration);
   void EstimateContactForces(const Eigen::Ref<const Eigen::VectorXd>& tau);
   ContactKind ClassifyTorqueContact(std::size_t candidate, FilterTrace::Contact& rec) const;
-  bool ApplyContactConstraint(const ContactPair& pair, const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
+  bool ApplyContactConstraint(const ContactPair& pair,
+                              const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
                               FilterTrace::Contact& rec);
   void CapContactInformation(double var);  // contact_model_sigma, after a normal-only constraint
   void CapVisualInformation(const Eigen::Matrix2d& R);  // visual_model_sigma, after a feature
@@ -208,10 +211,10 @@ class Filter {
   bool camera_state_ = false;  // ξ is part of the state (camera σ > 0)
   bool travel_ = false;        // travel_orientation > 0 with a gyration tensor
   Mat3 gyration_inv_O_ = Mat3::Zero();
-  int m_, n_, na_;             // joints; pose + biases; + camera error
+  int m_, n_, na_;  // joints; pose + biases; + camera error
 
   FilterState s_;
-  Eigen::VectorXd delta_;  // accumulated, not yet applied correction (na_)
+  Eigen::VectorXd delta_;        // accumulated, not yet applied correction (na_)
   Eigen::VectorXd delta_saved_;  // delta_ before the block being applied
   Eigen::MatrixXd Pn_;           // the covariance after the block being applied
   KinematicsData kin_;

@@ -16,7 +16,8 @@ struct RejectedJoint {
   int joint = -1;
   bool torque = false;
 };
-RejectedJoint ScreenJointSample(const HandModel& hand, double limit_margin, const Eigen::Ref<const Eigen::VectorXd>& q,
+RejectedJoint ScreenJointSample(const HandModel& hand, double limit_margin,
+                                const Eigen::Ref<const Eigen::VectorXd>& q,
                                 const Eigen::Ref<const Eigen::VectorXd>& tau);
 
 // Clamps every joint with limits into them.
@@ -29,6 +30,7 @@ void ValidateJointStiffness(const HandModel& hand);
 bool HasElasticJoints(const HandModel& hand);
 // The links' positions from the encoders' under the external torques τ: q − τ / k for every
 // elastic joint (τ finite: ScreenJointSample refuses it otherwise).
-void Undeflect(const HandModel& hand, const Eigen::Ref<const Eigen::VectorXd>& tau, Eigen::Ref<Eigen::VectorXd> q);
+void Undeflect(const HandModel& hand, const Eigen::Ref<const Eigen::VectorXd>& tau,
+               Eigen::Ref<Eigen::VectorXd> q);
 
 }  // namespace inhand

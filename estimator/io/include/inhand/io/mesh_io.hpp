@@ -43,10 +43,10 @@ std::vector<ConvexPiece> ComponentHulls(const std::vector<TriangleMesh>& meshes,
                                         const std::string& source);
 
 struct HacdParams {
-  int min_pieces = 1;              // HACD stops merging at this many pieces
-  double concavity = 0.002;        // [m] allowed concavity of a piece: decides the count
-  int vertices_per_piece = 64;     // hull vertex budget of each piece
-  std::string cache_dir;           // "" → $XDG_CACHE_HOME/inhand or ~/.cache/inhand
+  int min_pieces = 1;           // HACD stops merging at this many pieces
+  double concavity = 0.002;     // [m] allowed concavity of a piece: decides the count
+  int vertices_per_piece = 64;  // hull vertex budget of each piece
+  std::string cache_dir;        // "" → $XDG_CACHE_HOME/inhand or ~/.cache/inhand
 };
 // Approximate convex decomposition with HACD (Bullet extras), cached on disk keyed by the mesh
 // contents and parameters, since it takes about a second per thousand triangles.
@@ -75,7 +75,7 @@ ObjText MeshesObjText(const std::vector<TriangleMesh>& meshes, const std::string
 // its longest axis; a piece is the convex hull of a slab's vertices and of the surface's
 // crossings with its two planes. Slabs too thin to enclose a volume are dropped. Throws
 // InputError naming `source` when no piece is left.
-std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, double slab, int max_slabs,
-                                   const std::string& source);
+std::vector<ConvexPiece> SlabHulls(const std::vector<TriangleMesh>& meshes, double slab,
+                                   int max_slabs, const std::string& source);
 
 }  // namespace inhand

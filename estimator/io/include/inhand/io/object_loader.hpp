@@ -35,6 +35,7 @@ ObjectModel LoadObjectModel(const std::string& path, const PackageMap& packages,
 std::string ResolveContactFieldSource(const ObjectModel& obj, const ContactFieldOptions& options,
                                       const std::string& where);
 // Builds (or reads from the cache) and sets obj.field / obj.field_cache.
-void AttachContactField(ObjectModel& obj, const ContactFieldOptions& options, const std::string& where);
+void AttachContactField(ObjectModel& obj, const ContactFieldOptions& options,
+                        const std::string& where);
 
 }  // namespace inhand

@@ -19,8 +19,10 @@ class McapWriter {
   McapWriter& operator=(const McapWriter&) = delete;
 
   // encoding: "jsonschema" (with message encoding "json"), ...
-  std::uint16_t AddSchema(const std::string& name, const std::string& encoding, const std::string& data);
-  std::uint16_t AddChannel(const std::string& topic, std::uint16_t schema, const std::string& message_encoding);
+  std::uint16_t AddSchema(const std::string& name, const std::string& encoding,
+                          const std::string& data);
+  std::uint16_t AddChannel(const std::string& topic, std::uint16_t schema,
+                           const std::string& message_encoding);
   void Write(std::uint16_t channel, std::uint64_t log_time_ns, const std::string& data);
   void Close();
 

@@ -74,11 +74,22 @@ struct TfMsg {  // tf2_msgs/TFMessage (ROS 1's tf/tfMessage has the same layout)
   std::vector<StampedTransform> transforms;
 };
 
-using Payload = std::variant<std::monostate, JointStateMsg, ImageMsg, CompressedImageMsg, CameraInfoMsg, TfMsg, StampedTransform>;
+using Payload = std::variant<std::monostate, JointStateMsg, ImageMsg, CompressedImageMsg,
+                             CameraInfoMsg, TfMsg, StampedTransform>;
 
 // The message types inhand decodes, by their ROS 1 names (ROS 2's "pkg/msg/Type" is normalised
 // to "pkg/Type"). Everything else in a recording is listed but not decoded.
-enum class MsgType { kOther, kJointState, kImage, kCompressedImage, kCameraInfo, kTf, kPoseStamped, kTransformStamped, kOdometry };
+enum class MsgType {
+  kOther,
+  kJointState,
+  kImage,
+  kCompressedImage,
+  kCameraInfo,
+  kTf,
+  kPoseStamped,
+  kTransformStamped,
+  kOdometry
+};
 MsgType MsgTypeOf(const std::string& type_name);
 // "sensor_msgs/msg/JointState" → "sensor_msgs/JointState"; ROS 1 names stay as they are.
 std::string NormaliseTypeName(const std::string& type_name);

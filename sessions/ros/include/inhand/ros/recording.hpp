@@ -17,7 +17,11 @@ struct TopicInfo {
   std::string type;  // normalised (pkg/Type)
   std::uint64_t count = 0;
   std::int64_t first_ns = 0, last_ns = 0;  // log times
-  double Rate() const { return count > 1 && last_ns > first_ns ? (count - 1) * 1e9 / static_cast<double>(last_ns - first_ns) : 0.0; }
+  double Rate() const {
+    return count > 1 && last_ns > first_ns
+               ? (count - 1) * 1e9 / static_cast<double>(last_ns - first_ns)
+               : 0.0;
+  }
 };
 
 struct Message {

@@ -24,8 +24,9 @@ class TfTree {
   // The pose of `frame` in `base` at `t_ns`. Throws InputError when no chain joins them (naming
   // both parts of the tree), or when a dynamic edge on the chain has no sample within
   // `max_extrapolation_ns` of t (returns nullopt then if `soft`).
-  std::optional<Pose> Lookup(const std::string& base, const std::string& frame, std::int64_t t_ns, bool soft = false,
-                                  std::int64_t max_extrapolation_ns = 100000000) const;
+  std::optional<Pose> Lookup(const std::string& base, const std::string& frame, std::int64_t t_ns,
+                             bool soft = false,
+                             std::int64_t max_extrapolation_ns = 100000000) const;
   // Throws InputError naming both parts when no chain of edges joins `a` and `b`.
   void RequireConnected(const std::string& a, const std::string& b) const;
 
@@ -49,7 +50,8 @@ class TfTree {
   std::map<std::string, Edge> edges_;  // by child
   int conflicts_ = 0;
   std::set<std::string> Component(const std::string& frame) const;
-  std::optional<Pose> EdgeAt(const std::string& child, const Edge& e, std::int64_t t_ns, bool soft, std::int64_t max_ns) const;
+  std::optional<Pose> EdgeAt(const std::string& child, const Edge& e, std::int64_t t_ns, bool soft,
+                             std::int64_t max_ns) const;
   std::vector<std::string> ToRoot(const std::string& frame) const;
 };
 
