@@ -5,7 +5,7 @@ BUILD ?= build
 OUT ?= out/demo
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build demo test bench sanitize fuzz clean
+.PHONY: all deps configure build demo test bench sanitize fuzz format clean
 
 all: build
 
@@ -27,9 +27,14 @@ test: build
 bench: build
 	bash scripts/bench.sh $(BUILD)
 
-# ASan + UBSan over every test but the benchmarks and the installed-tree checks (build-sanitize/).
+# ASan + UBSan over the units, parsers, fuzz targets, filter, tracker and importer
+# (build-sanitize/); `bash scripts/sanitize.sh --all` runs every test under them.
 sanitize: deps
 	bash scripts/sanitize.sh
+
+# The house style (.clang-format) applied to every C++ file; CI checks it.
+format:
+	bash scripts/format.sh
 
 # The mutation fuzzer over every parser, longer than in make test (INHAND_FUZZ_RUNS per target).
 fuzz: build
