@@ -90,8 +90,7 @@ bool SessionPlayer::TruthCovers(double t) const {
 std::string SessionPlayer::InputReport::Describe(const Session& session,
                                                  const SessionModels& models,
                                                  const TrackerParams& params, const Rejected& r) {
-  const Joint& joint = models.hand.joints[static_cast<std::size_t>(
-      models.hand.q_joints[static_cast<std::size_t>(r.joint)])];
+  const Joint& joint = models.hand.QJoint(r.joint);
   std::ostringstream line;
   line << session.Resolve("joints.csv") << ":" << r.sample + 2 << ": " << (r.torque ? "tau:" : "q:")
        << models.hand.QNames()[static_cast<std::size_t>(r.joint)] << " = " << r.value;

@@ -405,8 +405,7 @@ std::vector<Session::LimitViolation> Session::LimitViolations(
     const HandModel& hand, const std::vector<int>& columns) const {
   std::vector<LimitViolation> out;
   for (int i = 0; i < hand.num_q(); ++i) {
-    const Joint& joint =
-        hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    const Joint& joint = hand.QJoint(i);
     if (!joint.has_limits) continue;
     LimitViolation v;
     v.q_index = i;

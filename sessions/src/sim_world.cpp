@@ -272,8 +272,7 @@ World::World(const HandModel& hand, const ObjectModel& object, const Transform& 
     w.q_link.push_back(
         w.link_of[static_cast<std::size_t>(hand.joints[static_cast<std::size_t>(j)].child_link)]);
   for (int i = 0; i < hand.num_q(); ++i) {
-    const Joint& joint =
-        hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    const Joint& joint = hand.QJoint(i);
     w.motors.push_back(std::make_unique<btMultiBodyJointMotor>(
         w.mb.get(), w.q_link[static_cast<std::size_t>(i)], 0.0, 0.001));
     w.motors.back()->setErp(1.0);

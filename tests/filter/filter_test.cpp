@@ -357,7 +357,7 @@ TEST(JointSamples, ScreeningClampingAndUndeflection) {
   GraspScene s;
   const Eigen::VectorXd tau = Eigen::VectorXd::Constant(16, 0.5);
   EXPECT_EQ(ScreenJointSample(s.hand, 0.5, s.q, tau).joint, -1);
-  const Joint& j3 = s.hand.joints[static_cast<std::size_t>(s.hand.q_joints[3])];
+  const Joint& j3 = s.hand.QJoint(3);
   ASSERT_TRUE(j3.has_limits);
   Eigen::VectorXd q = s.q;
   q[3] = j3.upper + 0.4;  // within the margin
@@ -376,8 +376,7 @@ TEST(JointSamples, ScreeningClampingAndUndeflection) {
   ClampToLimits(s.hand, q);
   EXPECT_EQ(q[3], j3.upper);
   for (int i = 0; i < 16; ++i) {
-    const Joint& j =
-        s.hand.joints[static_cast<std::size_t>(s.hand.q_joints[static_cast<std::size_t>(i)])];
+    const Joint& j = s.hand.QJoint(i);
     if (i == 3) continue;
     EXPECT_EQ(q[i], j.has_limits ? std::clamp(s.q[i], j.lower, j.upper) : s.q[i]) << i;
   }

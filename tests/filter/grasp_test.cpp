@@ -42,8 +42,7 @@ Grasp CloseAround(const HandModel& hand, BulletContactQuery& query, const Aabb& 
   Eigen::VectorXd open(n), half(n), target(n);
   std::vector<bool> closes(static_cast<std::size_t>(n), false);
   for (int i = 0; i < n; ++i) {
-    const Joint& j =
-        hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
+    const Joint& j = hand.QJoint(i);
     const bool symmetric = std::abs(j.lower + j.upper) < 0.2 * (j.upper - j.lower);
     open[i] = half[i] = target[i] = symmetric ? 0.0 : j.lower + 0.05 * (j.upper - j.lower);
     if (!symmetric) {

@@ -8,14 +8,6 @@
 
 namespace inhand {
 
-namespace {
-
-const Joint& JointOf(const HandModel& hand, int i) {
-  return hand.joints[static_cast<std::size_t>(hand.q_joints[static_cast<std::size_t>(i)])];
-}
-
-}  // namespace
-
 RejectedJoint ScreenJointSample(const HandModel& hand, double limit_margin,
                                 const Eigen::Ref<const Eigen::VectorXd>& q,
                                 const Eigen::Ref<const Eigen::VectorXd>& tau) {
@@ -23,7 +15,7 @@ RejectedJoint ScreenJointSample(const HandModel& hand, double limit_margin,
     if (!std::isfinite(tau[i])) return {i, true};
     const double v = q[i];
     if (!std::isfinite(v)) return {i, false};
-    const Joint& joint = JointOf(hand, i);
+    const Joint& joint = hand.QJoint(i);
     const double lo = joint.has_limits ? joint.lower - limit_margin : -1000.0;
     const double hi = joint.has_limits ? joint.upper + limit_margin : 1000.0;
     if (v < lo || v > hi) return {i, false};
@@ -33,7 +25,7 @@ RejectedJoint ScreenJointSample(const HandModel& hand, double limit_margin,
 
 void ClampToLimits(const HandModel& hand, Eigen::Ref<Eigen::VectorXd> q) {
   for (int i = 0; i < hand.num_q(); ++i) {
-    const Joint& joint = JointOf(hand, i);
+    const Joint& joint = hand.QJoint(i);
     if (joint.has_limits) q[i] = std::clamp(q[i], joint.lower, joint.upper);
   }
 }

@@ -62,6 +62,10 @@ struct HandModel {
   std::vector<double> joint_stiffness;
 
   int num_q() const { return static_cast<int>(q_joints.size()); }
+  // The joint of configuration entry i (q order).
+  const Joint& QJoint(int i) const {
+    return joints[static_cast<std::size_t>(q_joints[static_cast<std::size_t>(i)])];
+  }
   // -1 when absent.
   int LinkIndex(const std::string& link_name) const;
   int JointIndex(const std::string& joint_name) const;
