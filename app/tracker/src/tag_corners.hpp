@@ -23,21 +23,6 @@ class TagCorners {
                const Transform& T_PO, std::vector<TagDetection>& tags,
                std::vector<VisualFeature>& out);
 
-  // The object's poses that fit the corners Measure gave (four per tag, in its order), on
-  // their own: each tag's homography, its mirror image and `T_PO_guess` start a Gauss-Newton fit
-  // of all corners; each distinct minimum (5 mm or 5° apart), best first, with its covariance
-  // (HᵀH)⁻¹ σ² in the filter's error state (δp, δθ in the palm frame), σ the filter's pixel σ.
-  // A small tag seen at an angle has two poses that fit nearly alike: which one is the object's,
-  // its corners cannot tell.
-  struct PoseFit {
-    Transform T_PO = Transform::Identity();
-    Mat6 covariance = Mat6::Identity();
-    double cost = 0.0;  // [px²] sum of the corners' squared pixel errors at the fit
-  };
-  void FitPoses(const std::vector<VisualFeature>& corners, const Transform& T_PC,
-                const Intrinsics& K, const Transform& T_PO_guess, double pixel_sigma,
-                std::vector<PoseFit>& fits) const;
-
  private:
   const ObjectModel& object_;
   bool fine_search_;

@@ -6,14 +6,15 @@
 namespace inhand::tracker_detail {
 
 TagSource::TagSource(const ObjectModel& object, const TrackerParams& params)
-    : corners_(object, params),
+    : object_(object),
+      corners_(object, params),
       pixel_sigma_(params.filter.pixel_sigma),
       relocate_images_(params.tag_relocate_images) {}
 
 void TagSource::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
                         const Filter& f, VisualStep& step, VisualUpdate& update) {
   corners_.Measure(image, T_PC, K, f.T_PO(), step.tags, update.features);
-  TagCorners::PoseFit fit;
+  TagPoseFit fit;
   const bool elsewhere = relocate_images_ > 0 && Elsewhere(f, update.features, T_PC, K, fit);
   disagreements_ = elsewhere ? disagreements_ + 1 : 0;
   if (!elsewhere || disagreements_ < relocate_images_) return;
@@ -25,7 +26,7 @@ void TagSource::Measure(const Image8& image, const Transform& T_PC, const Intrin
 }
 
 // The pose difference's χ²₆ under the sum of both covariances above 99.9 %.
-bool TagSource::Disagrees(const Filter& f, const TagCorners::PoseFit& fit) {
+bool TagSource::Disagrees(const Filter& f, const TagPoseFit& fit) {
   const Vec6 d = PoseError(fit.T_PO, f.T_PO());
   const Mat6 S = f.covariance().topLeftCorner<6, 6>() + fit.covariance;
   return d.dot(S.ldlt().solve(d)) > chi2::k6Dof999;
@@ -36,9 +37,9 @@ bool TagSource::Disagrees(const Filter& f, const TagCorners::PoseFit& fit) {
 // fits two poses nearly alike: when neither is where the estimate is, the object is put at the
 // better one, its covariance widened by the other's difference (d dᵀ).
 bool TagSource::Elsewhere(const Filter& f, const std::vector<VisualFeature>& corners,
-                          const Transform& T_PC, const Intrinsics& K, TagCorners::PoseFit& where) {
+                          const Transform& T_PC, const Intrinsics& K, TagPoseFit& where) {
   const double sigma = pixel_sigma_;
-  corners_.FitPoses(corners, T_PC, K, f.T_PO(), sigma, fits_);
+  FitTagPoses(object_, corners, T_PC, K, f.T_PO(), sigma, fits_);
   if (fits_.empty() || fits_.front().cost > sigma * sigma * static_cast<double>(corners.size()))
     return false;
   where = fits_.front();

@@ -6,6 +6,7 @@
 // of a loosened grip, a start far off).
 #include <vector>
 
+#include "inhand/filter/tag_pose_fit.hpp"
 #include "tag_corners.hpp"
 #include "visual_source.hpp"
 
@@ -25,15 +26,16 @@ class TagSource final : public VisualSource {
   // Whether the corners of this image put the object where the estimate cannot be; if so,
   // `where` is the best fit.
   bool Elsewhere(const Filter& f, const std::vector<VisualFeature>& corners, const Transform& T_PC,
-                 const Intrinsics& K, TagCorners::PoseFit& where);
+                 const Intrinsics& K, TagPoseFit& where);
   // Whether a pose the tags fit is beyond what the estimate and the fit can both be off by.
-  static bool Disagrees(const Filter& f, const TagCorners::PoseFit& fit);
+  static bool Disagrees(const Filter& f, const TagPoseFit& fit);
 
+  const ObjectModel& object_;
   TagCorners corners_;
   double pixel_sigma_;
   int relocate_images_;
   int disagreements_ = 0;  // images in a row whose tags put the object where the estimate cannot be
-  std::vector<TagCorners::PoseFit> fits_;
+  std::vector<TagPoseFit> fits_;
 };
 
 }  // namespace inhand::tracker_detail
