@@ -25,7 +25,7 @@ foreach(dir estimator/core estimator/kinematics estimator/io estimator/contacts 
     FILES_MATCHING PATTERN "*.hpp" PATTERN "detail" EXCLUDE)
 endforeach()
 install(FILES ${PROJECT_SOURCE_DIR}/sessions/include/inhand/sessions/session.hpp
-  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/inhand/sessions)
+  ${PROJECT_SOURCE_DIR}/sessions/include/inhand/sessions/image_io.hpp DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/inhand/sessions)
 
 install(EXPORT inhandTargets NAMESPACE inhand:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/inhand)
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/inhandConfig.cmake.in

@@ -9,7 +9,7 @@
 #include "inhand/app/commands.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/renderer/image_compare.hpp"
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand::app {
 

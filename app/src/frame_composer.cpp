@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "inhand/core/error.hpp"
+#include "inhand/renderer/printed_tags.hpp"
 
 namespace inhand::app {
 

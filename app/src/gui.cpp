@@ -28,7 +28,7 @@
 #include "inhand/app/match_pictures.hpp"
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand::app {
 

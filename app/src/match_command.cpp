@@ -10,7 +10,7 @@
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/io/detail/json_fields.hpp"
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "staged_output.hpp"
 
 namespace fs = std::filesystem;

@@ -13,9 +13,9 @@
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
-#include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/overlay.hpp"
 #include "inhand/renderer/views.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand::app {
 

@@ -20,8 +20,8 @@
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/io/detail/json_fields.hpp"
-#include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/video.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "mcap_export.hpp"
 #include "staged_output.hpp"
 

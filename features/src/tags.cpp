@@ -61,49 +61,6 @@ Family CreateFamily(const std::string& f) {
 
 }  // namespace
 
-TriangleMesh MakeTagMesh(const TagPlacement& tag) {
-  const Family fam = CreateFamily(tag.family);
-  if (tag.id < 0 || static_cast<unsigned>(tag.id) >= fam.family->ncodes) {
-    fam.destroy(fam.family);
-    throw InputError("tag id " + std::to_string(tag.id) + " is not in family " + tag.family);
-  }
-  image_u8_t* im = apriltag_to_image(fam.family, tag.id);
-  const int w = im->width;
-  // The outer black border sits width_at_border modules across, centred in the bitmap.
-  const double border_modules = static_cast<double>(fam.family->width_at_border);
-  fam.destroy(fam.family);
-  constexpr int kScale = 24;  // nearest-neighbour upscaling keeps the edges sharp when sampled
-  cv::Mat big(w * kScale, w * kScale, CV_8UC3);
-  for (int y = 0; y < big.rows; ++y)
-    for (int x = 0; x < big.cols; ++x) {
-      const std::uint8_t v = im->buf[(y / kScale) * im->stride + x / kScale];
-      big.at<cv::Vec3b>(y, x) = cv::Vec3b(v, v, v);
-    }
-  image_u8_destroy(im);
-  std::vector<std::uint8_t> png;
-  cv::imencode(".png", big, png);
-  const double half = 0.5 * tag.size * w / border_modules;
-  TriangleMesh m;
-  m.vertices = {Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0),
-                Vec3(-half, half, 0)};
-  m.normals.assign(4, Vec3::UnitZ());
-  m.uvs = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
-  m.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
-  m.material.name = tag.family + ":" + std::to_string(tag.id);
-  m.material.rgba = Eigen::Vector4d(1, 1, 1, 1);
-  m.material.texture_blob = png;
-  return m;
-}
-
-std::vector<TriangleMesh> PrintedTagMeshes(const ObjectModel& object) {
-  std::vector<TriangleMesh> out;
-  for (const TagPlacement& tag : object.tags) {
-    out.push_back(MakeTagMesh(tag));
-    out.back().Apply(tag.T_OT * MakeTransform(Vec3(0, 0, 0.0002), Mat3::Identity()));
-  }
-  return out;
-}
-
 Image8 ReadGreyImage(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
   std::string ext = std::filesystem::path(path).extension().string();

@@ -14,7 +14,7 @@
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "inhand/sessions/output_folder.hpp"
 
 namespace fs = std::filesystem;

@@ -13,11 +13,11 @@
 
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
-#include "inhand/features/tags.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
+#include "inhand/renderer/printed_tags.hpp"
 #include "inhand/renderer/views.hpp"
 #include "inhand/sessions/camera_sim.hpp"
 #include "inhand/sessions/output_folder.hpp"

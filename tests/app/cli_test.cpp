@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/video.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 #include "test_support.hpp"
 

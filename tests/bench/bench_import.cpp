@@ -15,8 +15,8 @@
 #include <random>
 
 #include "inhand/io/urdf_loader.hpp"
-#include "inhand/renderer/image_io.hpp"
 #include "inhand/ros/import.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace {
 

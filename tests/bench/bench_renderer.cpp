@@ -7,6 +7,7 @@
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
+#include "inhand/renderer/printed_tags.hpp"
 #include "inhand/renderer/video.hpp"
 #include "inhand/renderer/views.hpp"
 
@@ -92,6 +93,7 @@ BENCHMARK(BM_VideoEncodeH264_1920x480)->Unit(benchmark::kMillisecond)->UseRealTi
 
 // The AprilTag step of jta at 640x480: detection on a rendered frame with a tagged bottle.
 #include "inhand/features/tags.hpp"
+#include "inhand/renderer/printed_tags.hpp"
 
 namespace inhand {
 namespace {

@@ -6,8 +6,9 @@
 
 #include "inhand/core/error.hpp"
 #include "inhand/features/tags.hpp"
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/renderer/printed_tags.hpp"
 #include "inhand/renderer/views.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "test_support.hpp"
 
 namespace inhand {
@@ -190,32 +191,6 @@ TEST(Tags, TinyImagesAndRegionsAtEveryBorderNeverCrash) {
   }
 }
 
-// The object's printed tags (its appearance in the virtual image): each quad lies 0.2 mm off the
-// surface along the tag's normal, centred on the tag, and contains the tag's outer corners.
-TEST(Tags, PrintedTagMeshesSitOnTheirPlacements) {
-  ObjectModel object;
-  TagPlacement a = Tag(0, 0.03), b = Tag(5, 0.02);
-  a.T_OT = MakeTransform(Vec3(0.01, 0.02, 0.05), ExpSO3(Vec3(0.3, -0.2, 0.5)));
-  b.T_OT = MakeTransform(Vec3(-0.03, 0.0, 0.0), ExpSO3(Vec3(0.0, M_PI / 2, 0.0)));
-  object.tags = {a, b};
-  const std::vector<TriangleMesh> meshes = PrintedTagMeshes(object);
-  ASSERT_EQ(meshes.size(), 2u);
-  for (std::size_t i = 0; i < 2; ++i) {
-    const TagPlacement& tag = object.tags[i];
-    const Vec3 n = tag.T_OT.linear().col(2);
-    Vec3 centre = Vec3::Zero();
-    for (const Vec3& v : meshes[i].vertices) {
-      EXPECT_NEAR(n.dot(v - tag.T_OT.translation()), 0.0002, 1e-9);
-      centre += v / static_cast<double>(meshes[i].vertices.size());
-    }
-    EXPECT_LT((centre - (tag.T_OT.translation() + 0.0002 * n)).norm(), 1e-9);
-    double half = 0.0;
-    for (const Vec3& v : meshes[i].vertices)
-      half = std::max(half, (tag.T_OT.inverse() * v).head<2>().cwiseAbs().maxCoeff());
-    EXPECT_GE(half, tag.size / 2 - 1e-9);  // the white border lies outside the outer corners
-  }
-}
-
 TEST(Tags, BadParametersAndIds) {
   TagDetectorParams p;
   p.family = "tag99h1";
@@ -223,10 +198,6 @@ TEST(Tags, BadParametersAndIds) {
   p = TagDetectorParams();
   p.decimate = 0.5;
   EXPECT_THROW(TagDetector{p}, InputError);
-  TagPlacement tag;
-  tag.id = 100000;
-  tag.size = 0.03;
-  EXPECT_THROW(MakeTagMesh(tag), InputError);
 }
 
 }  // namespace

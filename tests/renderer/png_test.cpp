@@ -8,7 +8,7 @@
 #include <cmath>
 #include <random>
 
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "test_support.hpp"
 
 namespace inhand {

@@ -9,10 +9,10 @@
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
 #include "inhand/renderer/image_compare.hpp"
-#include "inhand/renderer/image_io.hpp"
 #include "inhand/renderer/overlay.hpp"
 #include "inhand/renderer/video.hpp"
 #include "inhand/renderer/views.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "test_support.hpp"
 
 namespace inhand {

@@ -13,10 +13,10 @@
 
 #include "inhand/core/error.hpp"
 #include "inhand/io/urdf_loader.hpp"
-#include "inhand/renderer/image_io.hpp"
 #include "inhand/ros/import.hpp"
 #include "inhand/ros/recording.hpp"
 #include "inhand/ros/tf_tree.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "inhand/sessions/session.hpp"
 #include "test_support.hpp"
 

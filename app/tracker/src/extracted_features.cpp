@@ -5,6 +5,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "inhand/renderer/printed_tags.hpp"
+
 namespace inhand::tracker_detail {
 
 ExtractedFeatures::ExtractedFeatures(const HandModel& hand, const ObjectModel& object,

@@ -15,9 +15,9 @@
 
 #include "inhand/core/error.hpp"
 #include "inhand/io/urdf_loader.hpp"
-#include "inhand/renderer/image_io.hpp"
 #include "inhand/ros/recording.hpp"
 #include "inhand/ros/tf_tree.hpp"
+#include "inhand/sessions/image_io.hpp"
 #include "inhand/sessions/output_folder.hpp"
 #include "inhand/sessions/session.hpp"
 

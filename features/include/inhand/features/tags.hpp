@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "inhand/core/image.hpp"
-#include "inhand/core/mesh.hpp"
 #include "inhand/core/object_model.hpp"
 #include "inhand/core/so3.hpp"
 
@@ -65,12 +64,5 @@ class TagDetector {
 // decoder (as its tools and regression test do), anything else through OpenCV. Throws
 // InputError naming the file.
 Image8 ReadGreyImage(const std::string& path);
-
-// The tag's bitmap (white border included) as a textured quad in the tag frame (z = 0, facing
-// +z), for rendering tags on objects. Throws InputError for an unknown family or id.
-TriangleMesh MakeTagMesh(const TagPlacement& tag);
-// The object's tags as printed on it, for rendering its appearance: each tag's quad moved into
-// the object frame, 0.2 mm off the surface (no z-fighting with it).
-std::vector<TriangleMesh> PrintedTagMeshes(const ObjectModel& object);
 
 }  // namespace inhand

@@ -29,7 +29,7 @@ constexpr double kLegibleBelow = 0.05;
 constexpr double kLegibleLuminance = 0.16;
 std::optional<Eigen::Vector4d> LegibleColour(const Material& material);
 // The object's visual meshes, then `printed` (meshes already in the object frame: its printed
-// tags, see PrintedTagMeshes), all placed together by AddObject.
+// tags, printed_tags.hpp), all placed together by AddObject.
 std::vector<int> UploadObject(Renderer& renderer, const ObjectModel& object,
                               const std::vector<TriangleMesh>& printed = {});
 

@@ -13,7 +13,7 @@
 #include <queue>
 
 #include "inhand/core/error.hpp"
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand {
 

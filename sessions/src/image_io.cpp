@@ -1,4 +1,4 @@
-#include "inhand/renderer/image_io.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
