@@ -12,6 +12,7 @@
 #include <string>
 
 #include "inhand/core/error.hpp"
+#include "inhand/core/time.hpp"
 #include "inhand/sessions/session.hpp"
 #include "inhand/tracker/tracker.hpp"
 
@@ -68,7 +69,7 @@ int main(int argc, char** argv) {
         tau[static_cast<long>(j)] = session.tau(k)[models.joint_columns[j]];
       }
       tracker.AddJointSample(t, q, tau);
-      for (; next < frames.size() && frames[next].t <= t + 1e-9; ++next) {
+      for (; next < frames.size() && frames[next].t <= t + inhand::kTimeTolerance; ++next) {
         if (vision)
           tracker.AddImage(frames[next].t, session.LoadImage(static_cast<int>(next)),
                            frames[next].T_PC, *info.camera);

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "inhand/core/error.hpp"
+#include "inhand/core/time.hpp"
 
 namespace inhand::app {
 
@@ -64,7 +65,7 @@ SessionPlayer::SessionPlayer(const Session& session, const TrackerParams& params
         " joint samples can be fused; the first: " +
         report_.Describe(session_, models_, params_, report_.rejected_samples.front()));
   for (const CameraFrame& f : session_.camera_frames())
-    report_.frames_before_first_sample += n > 0 && f.t < session_.t(0) - 1e-9;
+    report_.frames_before_first_sample += n > 0 && f.t < session_.t(0) - kTimeTolerance;
   if (session_.has_groundtruth() && n > 0) {
     report_.truth_from = session_.groundtruth().front().t;
     report_.truth_to = session_.groundtruth().back().t;
@@ -83,8 +84,8 @@ void SessionPlayer::Gather(int k, Eigen::VectorXd& q_out, Eigen::VectorXd& tau_o
 }
 
 bool SessionPlayer::TruthCovers(double t) const {
-  return session_.has_groundtruth() && t >= session_.groundtruth().front().t - 1e-9 &&
-         t <= session_.groundtruth().back().t + 1e-9;
+  return session_.has_groundtruth() && t >= session_.groundtruth().front().t - kTimeTolerance &&
+         t <= session_.groundtruth().back().t + kTimeTolerance;
 }
 
 std::string SessionPlayer::InputReport::Describe(const Session& session,
@@ -159,7 +160,7 @@ std::size_t SessionPlayer::LoadFramesOf(int k) {
   // The images are read only for sets that see them (the pictures read their own).
   bool needed = false;
   for (const ModalitySet& s : sets_) needed = needed || s.tags || s.features;
-  while (state_.next_frame < frames.size() && frames[state_.next_frame].t <= t + 1e-9) {
+  while (state_.next_frame < frames.size() && frames[state_.next_frame].t <= t + kTimeTolerance) {
     state_.last_frame = static_cast<int>(state_.next_frame++);
     if (needed) images_.push_back(session_.LoadImage(state_.last_frame));
   }
@@ -226,8 +227,8 @@ int SessionPlayer::StepBlock(int k, int max_samples, int jobs,
   const auto& frames = session_.camera_frames();
   int end = k;
   while (end < session_.num_samples() && end - k < max_samples) {
-    const bool captures =
-        state_.next_frame < frames.size() && frames[state_.next_frame].t <= session_.t(end) + 1e-9;
+    const bool captures = state_.next_frame < frames.size() &&
+                          frames[state_.next_frame].t <= session_.t(end) + kTimeTolerance;
     ++end;
     if (captures) break;
   }

@@ -19,6 +19,7 @@
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
+#include "inhand/core/time.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/renderer/video.hpp"
 #include "inhand/sessions/image_io.hpp"
@@ -201,7 +202,7 @@ int RunReplay(const ReplayCommand& cmd) {
     int max_samples = 256;
     if (drawn && !has_camera) {
       int j = k;
-      while (j < n - 1 && session.t(j) < next_picture_t - 1e-9) ++j;
+      while (j < n - 1 && session.t(j) < next_picture_t - kTimeTolerance) ++j;
       max_samples = std::min(max_samples, j - k + 1);
     }
     const int count = player.StepBlock(k, max_samples, cmd.jobs, records);
@@ -251,7 +252,7 @@ int RunReplay(const ReplayCommand& cmd) {
     if (const int frame = player.last_frame(); frame >= 0 && drawn && has_camera)
       drawn->Add(FrameComposer::Capture(player, frame, t), frame);
     // No camera: a picture of the 3-D view whenever the video's clock passes a sample.
-    if (drawn && !has_camera && t >= next_picture_t - 1e-9) {
+    if (drawn && !has_camera && t >= next_picture_t - kTimeTolerance) {
       drawn->Add(FrameComposer::Capture(player, -1, t), pictures++);
       next_picture_t = session.t(0) + pictures / fps;
     }

@@ -24,11 +24,6 @@ namespace {
 
 constexpr std::size_t kNumEffects = static_cast<std::size_t>(Effect::kCount);
 
-Vec3 RandomUnitVector(std::mt19937& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
-}
-
 // sRGB-like transfer (gamma 2.2): what the renderer's 8-bit colours mean, and what the camera
 // writes (tables: the transfer runs for every pixel of every sub-frame).
 const std::array<float, 256>& ToLinearTable() {
@@ -238,6 +233,11 @@ void TintObject(ObjectModel& object, const Vec3& gains) {
     m.material.texture_blob = std::move(png);
     m.material.texture_file.clear();
   }
+}
+
+Vec3 RandomUnitVector(std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  return Vec3(n(rng), n(rng), n(rng)).normalized();
 }
 
 void MisplaceTags(ObjectModel& object, double position, double orientation, std::mt19937& rng) {

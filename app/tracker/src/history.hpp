@@ -4,14 +4,16 @@
 // it with its mutex; the rewind works on copies of the slots (CopyOut, WriteBack).
 #include <vector>
 
+#include "inhand/core/time.hpp"
 #include "inhand/filter/filter.hpp"
 #include "inhand/tracker/tracker.hpp"
 
 namespace inhand::tracker_detail {
 
-// [s] an image captured at t_c goes after the samples with t <= t_c + this; the same tolerance
-// decides which images a new sample passes and which are beyond the horizon.
-constexpr double kTimeTolerance = 1e-9;
+// inhand::kTimeTolerance (core/time.hpp): an image captured at t_c goes after the samples with
+// t <= t_c + it; the same tolerance decides which images a new sample passes and which are beyond
+// the horizon.
+using ::inhand::kTimeTolerance;
 
 class History {
  public:

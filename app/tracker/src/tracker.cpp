@@ -24,8 +24,6 @@
 
 namespace inhand {
 
-using tracker_detail::kTimeTolerance;
-
 std::string Modalities::Name() const {
   return std::string("j") + (torque ? "t" : "") + (tags ? "a" : "") + (features ? "f" : "");
 }

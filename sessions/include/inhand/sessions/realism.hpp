@@ -9,11 +9,10 @@
 //  - The hand is not its URDF: joint origins off, joints that deflect under load (the encoder
 //    reads the motor side), soft fingertip pads.
 //  - The torques are not the contact part: drifting offsets, friction and gravity residue, lag.
-//  - The camera is not our renderer (CameraSimulator, camera_sim.hpp): its own light rig with cast
-//  shadows and
-//    specular highlights relighting the scene's albedo, exposure and white-balance drift,
-//    vignetting, lens distortion, motion blur, shot and read noise, JPEG; the session's
-//    intrinsics and distortion coefficients off from the true ones.
+//  - The camera is not our renderer (CameraSimulator, camera_sim.hpp): its own light rig with
+//    cast shadows and specular highlights relighting the scene's albedo, exposure and
+//    white-balance drift, vignetting, lens distortion, motion blur, shot and read noise, JPEG;
+//    the session's intrinsics and distortion coefficients off from the true ones.
 #include <array>
 #include <bitset>
 #include <random>
@@ -114,6 +113,9 @@ ObjectModel ScaledObject(const ObjectModel& object, const Vec3& scale);
 void TintObject(ObjectModel& object, const Vec3& gains);
 // Every tag moved by `position` in its plane and turned by `orientation` about a random axis.
 void MisplaceTags(ObjectModel& object, double position, double orientation, std::mt19937& rng);
+// A direction drawn uniformly on the unit sphere (a normal 3-vector, normalised; a fresh
+// distribution, so that no value is kept from one call to the next).
+Vec3 RandomUnitVector(std::mt19937& rng);
 // The estimator's object when it is not the world's (Effect::kObjectMesh): the model's visual
 // meshes simplified (SimplifyMesh) and a convex decomposition of its own (SlabHulls of the
 // simplified meshes), as files for the session's model folder that replace the model's own:
