@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
 
 #include "inhand/core/error.hpp"
+#include "inhand/filter/detail/param_table.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 
 namespace inhand {
@@ -17,90 +17,48 @@ namespace {
 using Json = nlohmann::json;
 
 // One table per section drives reading and writing; validation is the structs' own.
-template <typename P>
-struct Field {
-  const char* name;
-  double P::*number = nullptr;
-  int P::*integer = nullptr;
-  bool P::*flag = nullptr;
-  unsigned P::*unsigned_integer = nullptr;
-};
+using param_table::Flag;
+using param_table::Integer;
+using param_table::Number;
+using param_table::Read;
+using param_table::Unsigned;
+using param_table::Write;
 
-const std::vector<Field<TagDetectorParams>>& TagFields() {
+const std::vector<param_table::Field<TagDetectorParams>>& TagFields() {
   using T = TagDetectorParams;
-  static const std::vector<Field<T>> fields = {{"decimate", &T::decimate},
-                                               {"refine_edges", nullptr, nullptr, &T::refine_edges},
-                                               {"sigma", &T::sigma},
-                                               {"threads", nullptr, &T::threads},
-                                               {"max_hamming", nullptr, &T::max_hamming},
-                                               {"min_decision_margin", &T::min_decision_margin}};
+  static const std::vector<param_table::Field<T>> fields = {
+      Number("decimate", &T::decimate),
+      Flag("refine_edges", &T::refine_edges),
+      Number("sigma", &T::sigma),
+      Integer("threads", &T::threads),
+      Integer("max_hamming", &T::max_hamming),
+      Number("min_decision_margin", &T::min_decision_margin)};
   return fields;
 }
 
-const std::vector<Field<FeatureParams>>& FeatureFields() {
+const std::vector<param_table::Field<FeatureParams>>& FeatureFields() {
   using F = FeatureParams;
-  static const std::vector<Field<F>> fields = {
-      {"canny_low", &F::canny_low},
-      {"canny_high", &F::canny_high},
-      {"blur_sigma", &F::blur_sigma},
-      {"harris_block", nullptr, &F::harris_block},
-      {"harris_k", &F::harris_k},
-      {"harris_relative", &F::harris_relative},
-      {"max_corners", nullptr, &F::max_corners},
-      {"min_corner_distance", &F::min_corner_distance},
-      {"occluder_clearance", nullptr, &F::occluder_clearance},
-      {"piece_radius", nullptr, &F::piece_radius},
-      {"min_piece_pixels", nullptr, &F::min_piece_pixels},
-      {"search_radius", nullptr, &F::search_radius},
-      {"max_search_radius", nullptr, &F::max_search_radius},
-      {"global_truncation", &F::global_truncation},
-      {"orientation_bins", nullptr, &F::orientation_bins},
-      {"min_vote_fraction", &F::min_vote_fraction},
-      {"ransac_threshold", &F::ransac_threshold},
-      {"ransac_iterations", nullptr, &F::ransac_iterations},
-      {"seed", nullptr, nullptr, nullptr, &F::seed}};
+  static const std::vector<param_table::Field<F>> fields = {
+      Number("canny_low", &F::canny_low),
+      Number("canny_high", &F::canny_high),
+      Number("blur_sigma", &F::blur_sigma),
+      Integer("harris_block", &F::harris_block),
+      Number("harris_k", &F::harris_k),
+      Number("harris_relative", &F::harris_relative),
+      Integer("max_corners", &F::max_corners),
+      Number("min_corner_distance", &F::min_corner_distance),
+      Integer("occluder_clearance", &F::occluder_clearance),
+      Integer("piece_radius", &F::piece_radius),
+      Integer("min_piece_pixels", &F::min_piece_pixels),
+      Integer("search_radius", &F::search_radius),
+      Integer("max_search_radius", &F::max_search_radius),
+      Number("global_truncation", &F::global_truncation),
+      Integer("orientation_bins", &F::orientation_bins),
+      Number("min_vote_fraction", &F::min_vote_fraction),
+      Number("ransac_threshold", &F::ransac_threshold),
+      Integer("ransac_iterations", &F::ransac_iterations),
+      Unsigned("seed", &F::seed)};
   return fields;
-}
-
-template <typename P>
-Json Write(const P& p, const std::vector<Field<P>>& fields) {
-  Json j = Json::object();
-  for (const Field<P>& f : fields) {
-    if (f.number) j[f.name] = p.*f.number;
-    if (f.integer) j[f.name] = p.*f.integer;
-    if (f.flag) j[f.name] = p.*f.flag;
-    if (f.unsigned_integer) j[f.name] = p.*f.unsigned_integer;
-  }
-  return j;
-}
-
-template <typename P>
-void Read(const Json& j, const std::vector<Field<P>>& fields, const std::string& where, P& p) {
-  if (!j.is_object()) throw InputError(where + ": expected a JSON object of parameters");
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    const Field<P>* field = nullptr;
-    for (const Field<P>& f : fields)
-      if (it.key() == f.name) field = &f;
-    const std::string name = where + ": parameter '" + it.key() + "'";
-    if (field == nullptr) throw InputError(where + ": unknown parameter '" + it.key() + "'");
-    const Json& v = it.value();
-    if (field->flag) {
-      if (!v.is_boolean()) throw InputError(name + " must be true or false");
-      p.*field->flag = v.get<bool>();
-    } else if (field->integer || field->unsigned_integer) {
-      if (!v.is_number_integer()) throw InputError(name + " must be an integer");
-      const long long value = v.get<long long>();
-      if (value < (field->integer ? -2147483647LL : 0LL) || value > 2147483647LL)
-        throw InputError(name + " is " + std::to_string(value) + ", out of range");
-      if (field->integer)
-        p.*field->integer = static_cast<int>(value);
-      else
-        p.*field->unsigned_integer = static_cast<unsigned>(value);
-    } else {
-      if (!v.is_number()) throw InputError(name + " must be a number");
-      p.*field->number = v.get<double>();
-    }
-  }
 }
 
 // The structs' own Validate() messages, prefixed with the file.

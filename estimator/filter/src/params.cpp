@@ -2,114 +2,66 @@
 
 #include <cmath>
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "inhand/core/error.hpp"
+#include "inhand/filter/detail/param_table.hpp"
 
 namespace inhand {
 
 namespace {
 
-using Json = nlohmann::json;
+using Json = param_table::Json;
 
-// One table drives JSON reading, writing and validation.
-struct Field {
-  const char* name;
-  double FilterParams::*number = nullptr;
-  int FilterParams::*integer = nullptr;
-  bool FilterParams::*flag = nullptr;
-  double lo = 0.0, hi = 0.0;  // allowed range (numbers and integers)
-  bool lo_open = false;       // lo excluded
-  const char* expected = "";
-};
+using param_table::Flag;
+using param_table::Integer;
+using param_table::Number;
+using Field = param_table::Field<FilterParams>;
 
+// One table drives JSON reading, writing and validation (param_table.hpp).
 const std::vector<Field>& Fields() {
+  using P = FilterParams;
   static const std::vector<Field> fields = {
-      {"contact_sigma", &FilterParams::contact_sigma, nullptr, nullptr, 1e-5, 1.0, false,
-       "in [1e-5, 1] m"},
-      {"contact_normal_only", nullptr, nullptr, &FilterParams::contact_normal_only, 0, 0, false,
-       "true or false"},
-      {"contact_iterations", nullptr, &FilterParams::contact_iterations, nullptr, 1, 20, false,
-       "an integer in [1, 20]"},
-      {"contact_model_sigma", &FilterParams::contact_model_sigma, nullptr, nullptr, 0.0, 1.0, false,
-       "in [0, 1] m (0 disables)"},
-      {"contact_gate_chi2", &FilterParams::contact_gate_chi2, nullptr, nullptr, 0.0, 1e9, false,
-       ">= 0 (0 disables)"},
-      {"prediction_contact_distance", &FilterParams::prediction_contact_distance, nullptr, nullptr,
-       0.0, 0.1, false, "in [0, 0.1] m"},
-      {"torque_candidate_distance", &FilterParams::torque_candidate_distance, nullptr, nullptr, 0.0,
-       0.2, false, "in [0, 0.2] m"},
-      {"friction_cone_deg", &FilterParams::friction_cone_deg, nullptr, nullptr, 0.0, 90.0, true,
-       "in (0, 90] degrees"},
-      {"force_min", &FilterParams::force_min, nullptr, nullptr, 0.0, 1e4, false, "in [0, 1e4] N"},
-      {"torque_damping", &FilterParams::torque_damping, nullptr, nullptr, 1e-12, 1.0, false,
-       "in [1e-12, 1]"},
-      {"torque_distance_scale", &FilterParams::torque_distance_scale, nullptr, nullptr, 0.0, 1.0,
-       false, "in [0, 1] m (0: the paper's pseudo-inverse)"},
-      {"twist_damping", &FilterParams::twist_damping, nullptr, nullptr, 1e-12, 1.0, false,
-       "in [1e-12, 1]"},
-      {"process_position", &FilterParams::process_position, nullptr, nullptr, 0.0, 10.0, false,
-       "in [0, 10] m/sqrt(s)"},
-      {"process_orientation", &FilterParams::process_orientation, nullptr, nullptr, 0.0, 10.0,
-       false, "in [0, 10] rad/sqrt(s)"},
-      {"process_bias", &FilterParams::process_bias, nullptr, nullptr, 0.0, 10.0, false,
-       "in [0, 10] rad/sqrt(s)"},
-      {"motion_position", &FilterParams::motion_position, nullptr, nullptr, 0.0, 10.0, false,
-       "in [0, 10]"},
-      {"motion_orientation", &FilterParams::motion_orientation, nullptr, nullptr, 0.0, 10.0, false,
-       "in [0, 10]"},
-      {"travel_orientation", &FilterParams::travel_orientation, nullptr, nullptr, 0.0, 1.0, false,
-       "in [0, 1] m (0 disables)"},
-      {"slip_torque", &FilterParams::slip_torque, nullptr, nullptr, 0.0, 1e4, false,
-       "in [0, 1e4] N m (0 disables)"},
-      {"slip_scale", &FilterParams::slip_scale, nullptr, nullptr, 1.0, 1e4, false, "in [1, 1e4]"},
-      {"pixel_sigma", &FilterParams::pixel_sigma, nullptr, nullptr, 0.01, 1000.0, false,
-       "in [0.01, 1000] px"},
-      {"visual_gate_chi2", &FilterParams::visual_gate_chi2, nullptr, nullptr, 0.0, 1e9, false,
-       ">= 0 (0 disables)"},
-      {"visual_model_sigma", &FilterParams::visual_model_sigma, nullptr, nullptr, 0.0, 1000.0,
-       false, "in [0, 1000] px (0 disables)"},
-      {"camera_position_sigma", &FilterParams::camera_position_sigma, nullptr, nullptr, 0.0, 1.0,
-       false, "in [0, 1] m"},
-      {"camera_orientation_sigma", &FilterParams::camera_orientation_sigma, nullptr, nullptr, 0.0,
-       1.0, false, "in [0, 1] rad"},
+      Number("contact_sigma", &P::contact_sigma, 1e-5, 1.0, "in [1e-5, 1] m"),
+      Flag("contact_normal_only", &P::contact_normal_only),
+      Integer("contact_iterations", &P::contact_iterations, 1, 20, "an integer in [1, 20]"),
+      Number("contact_model_sigma", &P::contact_model_sigma, 0.0, 1.0, "in [0, 1] m (0 disables)"),
+      Number("contact_gate_chi2", &P::contact_gate_chi2, 0.0, 1e9, ">= 0 (0 disables)"),
+      Number("prediction_contact_distance", &P::prediction_contact_distance, 0.0, 0.1,
+             "in [0, 0.1] m"),
+      Number("torque_candidate_distance", &P::torque_candidate_distance, 0.0, 0.2, "in [0, 0.2] m"),
+      Number("friction_cone_deg", &P::friction_cone_deg, 0.0, 90.0, "in (0, 90] degrees", true),
+      Number("force_min", &P::force_min, 0.0, 1e4, "in [0, 1e4] N"),
+      Number("torque_damping", &P::torque_damping, 1e-12, 1.0, "in [1e-12, 1]"),
+      Number("torque_distance_scale", &P::torque_distance_scale, 0.0, 1.0,
+             "in [0, 1] m (0: the paper's pseudo-inverse)"),
+      Number("twist_damping", &P::twist_damping, 1e-12, 1.0, "in [1e-12, 1]"),
+      Number("process_position", &P::process_position, 0.0, 10.0, "in [0, 10] m/sqrt(s)"),
+      Number("process_orientation", &P::process_orientation, 0.0, 10.0, "in [0, 10] rad/sqrt(s)"),
+      Number("process_bias", &P::process_bias, 0.0, 10.0, "in [0, 10] rad/sqrt(s)"),
+      Number("motion_position", &P::motion_position, 0.0, 10.0, "in [0, 10]"),
+      Number("motion_orientation", &P::motion_orientation, 0.0, 10.0, "in [0, 10]"),
+      Number("travel_orientation", &P::travel_orientation, 0.0, 1.0, "in [0, 1] m (0 disables)"),
+      Number("slip_torque", &P::slip_torque, 0.0, 1e4, "in [0, 1e4] N m (0 disables)"),
+      Number("slip_scale", &P::slip_scale, 1.0, 1e4, "in [1, 1e4]"),
+      Number("pixel_sigma", &P::pixel_sigma, 0.01, 1000.0, "in [0.01, 1000] px"),
+      Number("visual_gate_chi2", &P::visual_gate_chi2, 0.0, 1e9, ">= 0 (0 disables)"),
+      Number("visual_model_sigma", &P::visual_model_sigma, 0.0, 1000.0,
+             "in [0, 1000] px (0 disables)"),
+      Number("camera_position_sigma", &P::camera_position_sigma, 0.0, 1.0, "in [0, 1] m"),
+      Number("camera_orientation_sigma", &P::camera_orientation_sigma, 0.0, 1.0, "in [0, 1] rad"),
   };
   return fields;
-}
-
-std::string Num(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
 }
 
 }  // namespace
 
 void FilterParams::Validate(const std::string& source) const {
-  for (const Field& f : Fields()) {
-    double v;
-    if (f.number)
-      v = this->*f.number;
-    else if (f.integer)
-      v = this->*f.integer;
-    else
-      continue;
-    const bool ok = std::isfinite(v) && (f.lo_open ? v > f.lo : v >= f.lo) && v <= f.hi;
-    if (!ok)
-      throw InputError(source + ": parameter '" + f.name + "' is " + Num(v) + ", expected " +
-                       f.expected);
-  }
+  param_table::Validate(*this, Fields(), source);
 }
 
 std::string FilterParamsToJson(const FilterParams& params) {
-  Json j = Json::object();
-  for (const Field& f : Fields()) {
-    if (f.number) j[f.name] = params.*f.number;
-    if (f.integer) j[f.name] = params.*f.integer;
-    if (f.flag) j[f.name] = params.*f.flag;
-  }
-  return j.dump(2);
+  return param_table::Write(params, Fields()).dump(2);
 }
 
 FilterParams FilterParamsFromJson(const std::string& json_text, const std::string& source) {
@@ -122,34 +74,8 @@ FilterParams FilterParamsFromJson(const std::string& json_text, const std::strin
   } catch (const Json::parse_error& e) {
     throw InputError(source + ": malformed JSON (" + e.what() + ")");
   }
-  if (!j.is_object()) throw InputError(source + ": expected a JSON object of parameters");
   FilterParams p;
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    const Field* field = nullptr;
-    for (const Field& f : Fields())
-      if (it.key() == f.name) field = &f;
-    if (field == nullptr) throw InputError(source + ": unknown parameter '" + it.key() + "'");
-    const Json& v = it.value();
-    if (field->flag) {
-      if (!v.is_boolean())
-        throw InputError(source + ": parameter '" + it.key() + "' must be true or false");
-      p.*field->flag = v.get<bool>();
-    } else if (field->integer) {
-      if (!v.is_number_integer())
-        throw InputError(source + ": parameter '" + it.key() + "' must be an integer");
-      // Read wide and range-checked: get<int>() wraps 4294967297 to 1.
-      const double wide = v.is_number_unsigned() ? static_cast<double>(v.get<unsigned long long>())
-                                                 : static_cast<double>(v.get<long long>());
-      if (!(wide >= field->lo && wide <= field->hi))
-        throw InputError(source + ": parameter '" + it.key() + "' is " + v.dump() + ", expected " +
-                         field->expected);
-      p.*field->integer = static_cast<int>(wide);
-    } else {
-      if (!v.is_number())
-        throw InputError(source + ": parameter '" + it.key() + "' must be a number");
-      p.*field->number = v.get<double>();
-    }
-  }
+  param_table::Read(j, Fields(), source, p);
   p.Validate(source);
   return p;
 }
