@@ -16,6 +16,7 @@
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/sessions/image_io.hpp"
 #include "inhand/sessions/output_folder.hpp"
+#include "session_format.hpp"
 
 namespace fs = std::filesystem;
 
@@ -28,8 +29,6 @@ std::string FormatDouble(double v) {
 }
 
 namespace {
-
-constexpr int kFormatVersion = 1;
 
 // ---------------------------------------------------------------------------------------------
 // CSV: comma-separated, one header line, no quoting (names and paths must not hold commas).
@@ -164,26 +163,45 @@ Transform ParsePose(const Csv& csv, const CsvRow& row, std::size_t c) {
   return MakeTransform(p, q);
 }
 
-const std::vector<std::string> kPoseColumns = {"px", "py", "pz", "qw", "qx", "qy", "qz"};
-
 // A header: `leading` columns, then the pose's.
 std::vector<std::string> WithPoseColumns(std::vector<std::string> leading) {
   leading.insert(leading.end(), kPoseColumns.begin(), kPoseColumns.end());
   return leading;
 }
 
-std::string PoseFields(const Vec3& p, const Quat& q) {
-  std::string s;
-  for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z()}) s += "," + FormatDouble(v);
-  return s;
+// session.json's "hand.joint_stiffness": one stiffness for every joint, or one per joint name
+// ("*": the rest).
+std::map<std::string, double> ReadJointStiffness(const jsonf::Field& ks) {
+  std::map<std::string, double> out;
+  if (ks.value.is_number()) {
+    out["*"] = ks.PositiveNumber("N m/rad");
+  } else if (ks.value.is_object() && !ks.value.empty()) {
+    for (auto it = ks.value.begin(); it != ks.value.end(); ++it)
+      out[it.key()] = ks[it.key()].PositiveNumber("N m/rad");
+  } else {
+    ks.Fail(
+        "a stiffness > 0 in N m/rad for every joint, or an object {\"JOINT\": N m/rad, \"*\": "
+        "for the rest}");
+  }
+  return out;
 }
-std::string PoseFields(const Transform& T) { return PoseFields(T.translation(), Quat(T.linear())); }
 
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw InputError(path.string() + ": cannot write");
-  out << text;
-  if (!out) throw InputError(path.string() + ": write failed");
+// session.json's "camera": the intrinsics, validated.
+Intrinsics ReadIntrinsics(const jsonf::Field& c, const std::string& json_path) {
+  Intrinsics K;
+  K.width = c["width"].Integer();
+  K.height = c["height"].Integer();
+  K.fx = c["fx"].Number();
+  K.fy = c["fy"].Number();
+  K.cx = c["cx"].Number();
+  K.cy = c["cy"].Number();
+  if (c.Has("distortion")) {
+    const jsonf::Field d = c["distortion"];
+    if (d.Size() != 5) d.Fail("5 coefficients (k1, k2, p1, p2, k3)");
+    for (std::size_t i = 0; i < 5; ++i) K.distortion[i] = d.At(i).Number();
+  }
+  K.Validate(json_path);
+  return K;
 }
 
 }  // namespace
@@ -201,12 +219,21 @@ Session Session::Load(const std::string& dir) {
   s.dir_ = dir;
   const std::string json_path = (fs::path(dir) / "session.json").string();
   if (!fs::exists(json_path)) throw InputError(json_path + ": missing (every session has one)");
+  s.info_ = ReadInfo(dir, json_path);
+  s.LoadJoints();
+  s.LoadCameraFrames(json_path);
+  s.LoadGroundTruth();
+  return s;
+}
+
+SessionInfo Session::ReadInfo(const std::string& dir, const std::string& json_path) {
+  SessionInfo info;
   const jsonf::Json doc = jsonf::ReadFile(json_path);
   const jsonf::Field root{doc, json_path, ""};
   if (root["format"].String() != "inhand-session") root["format"].Fail("\"inhand-session\"");
-  if (root["version"].Integer() != kFormatVersion)
-    root["version"].Fail("version " + std::to_string(kFormatVersion) + " (this build reads v1)");
-  SessionInfo& info = s.info_;
+  if (root["version"].Integer() != kSessionFormatVersion)
+    root["version"].Fail("version " + std::to_string(kSessionFormatVersion) +
+                         " (this build reads v1)");
   info.name = root.Has("name") ? root["name"].String() : fs::path(dir).filename().string();
   info.hand_urdf = root["hand"]["urdf"].String();
   if (root["hand"].Has("packages")) {
@@ -215,19 +242,8 @@ Session Session::Load(const std::string& dir) {
     for (auto it = pk.value.begin(); it != pk.value.end(); ++it)
       info.packages[it.key()] = pk[it.key()].String();
   }
-  if (root["hand"].Has("joint_stiffness")) {
-    const jsonf::Field ks = root["hand"]["joint_stiffness"];
-    if (ks.value.is_number()) {
-      info.joint_stiffness["*"] = ks.PositiveNumber("N m/rad");
-    } else if (ks.value.is_object() && !ks.value.empty()) {
-      for (auto it = ks.value.begin(); it != ks.value.end(); ++it)
-        info.joint_stiffness[it.key()] = ks[it.key()].PositiveNumber("N m/rad");
-    } else {
-      ks.Fail(
-          "a stiffness > 0 in N m/rad for every joint, or an object {\"JOINT\": N m/rad, \"*\": "
-          "for the rest}");
-    }
-  }
+  if (root["hand"].Has("joint_stiffness"))
+    info.joint_stiffness = ReadJointStiffness(root["hand"]["joint_stiffness"]);
   info.object = root["object"]["model"].String();
   if (root.Has("conventions")) {
     const jsonf::Field c = root["conventions"];
@@ -237,23 +253,8 @@ Session Session::Load(const std::string& dir) {
     if (c.Has("length") && c["length"].String() != "m") c["length"].Fail("\"m\"");
     if (c.Has("angle") && c["angle"].String() != "rad") c["angle"].Fail("\"rad\"");
   }
-  if (root.Has("camera") && !root["camera"].value.is_null()) {
-    const jsonf::Field c = root["camera"];
-    Intrinsics K;
-    K.width = c["width"].Integer();
-    K.height = c["height"].Integer();
-    K.fx = c["fx"].Number();
-    K.fy = c["fy"].Number();
-    K.cx = c["cx"].Number();
-    K.cy = c["cy"].Number();
-    if (c.Has("distortion")) {
-      const jsonf::Field d = c["distortion"];
-      if (d.Size() != 5) d.Fail("5 coefficients (k1, k2, p1, p2, k3)");
-      for (std::size_t i = 0; i < 5; ++i) K.distortion[i] = d.At(i).Number();
-    }
-    K.Validate(json_path);
-    info.camera = K;
-  }
+  if (root.Has("camera") && !root["camera"].value.is_null())
+    info.camera = ReadIntrinsics(root["camera"], json_path);
   const jsonf::Field init = root["initial_estimate"];
   info.initial_T_PO = init["T_PO"].Pose();
   if (!(info.initial_T_PO.translation().norm() <= kMaxDistance))
@@ -270,14 +271,17 @@ Session Session::Load(const std::string& dir) {
   info.sigma_joint_bias =
       within(init["sigma_joint_bias"], 0.0, 2 * M_PI, "a number in [0, 2 pi] rad");
   if (root.Has("provenance")) info.provenance_json = root["provenance"].value.dump();
+  return info;
+}
 
-  // joints.csv: t, q:<joint>..., then tau:<joint>... for the same joints or no torque columns at
-  // all (hands without torque sensors). Parsed row by row into flat buffers.
+// joints.csv: t, q:<joint>..., then tau:<joint>... for the same joints or no torque columns at
+// all (hands without torque sensors). Parsed row by row into flat buffers.
+void Session::LoadJoints() {
   std::size_t m = 0, m_tau = 0;
   std::vector<double> q_rows, tau_rows;
   TimeColumn joint_time;
   const Csv joints =
-      ReadCsv((fs::path(dir) / "joints.csv").string(), [&](const Csv& csv, const CsvRow& row) {
+      ReadCsv((fs::path(dir_) / "joints.csv").string(), [&](const Csv& csv, const CsvRow& row) {
         if (m == 0) {  // the header, checked at the first row
           if (csv.header.empty() || csv.header[0] != "t")
             throw InputError(csv.file + ":1: first column must be 't'");
@@ -303,10 +307,10 @@ Session Session::Load(const std::string& dir) {
                                  th + "', expected 'tau:" + name +
                                  "' (torques in the order of the positions)");
             }
-            s.joint_names_.push_back(name);
+            joint_names_.push_back(name);
           }
         }
-        s.t_.push_back(joint_time(csv, row));
+        t_.push_back(joint_time(csv, row));
         for (std::size_t j = 0; j < m; ++j) q_rows.push_back(ParseNumber(csv, row, 1 + j));
         for (std::size_t j = 0; j < m_tau; ++j)
           tau_rows.push_back(ParseNumber(csv, row, 1 + m + j));
@@ -314,48 +318,52 @@ Session Session::Load(const std::string& dir) {
   if (joints.rows == 0) throw InputError(joints.file + ": no samples");
   const long n = joints.rows;
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  s.q_ = Eigen::Map<const RowMajor>(q_rows.data(), n, static_cast<long>(m));
+  q_ = Eigen::Map<const RowMajor>(q_rows.data(), n, static_cast<long>(m));
   std::vector<double>().swap(q_rows);
-  s.tau_ = Eigen::Map<const RowMajor>(tau_rows.data(), n, static_cast<long>(m_tau));
+  tau_ = Eigen::Map<const RowMajor>(tau_rows.data(), n, static_cast<long>(m_tau));
   std::vector<double>().swap(tau_rows);
-  s.t_.shrink_to_fit();
+  t_.shrink_to_fit();
+}
 
-  // camera.csv: t, image, pose of the camera in P.
-  const fs::path camera_csv = fs::path(dir) / "camera.csv";
-  if (info.camera && !fs::exists(camera_csv))
+// camera.csv: t, image, pose of the camera in P; present exactly when session.json has a camera.
+void Session::LoadCameraFrames(const std::string& json_path) {
+  const fs::path camera_csv = fs::path(dir_) / "camera.csv";
+  if (info_.camera && !fs::exists(camera_csv))
     throw InputError(camera_csv.string() + ": missing, but session.json declares a camera");
   if (fs::exists(camera_csv)) {
-    if (!info.camera)
+    if (!info_.camera)
       throw InputError(json_path +
                        ": camera.csv exists but session.json has no \"camera\" intrinsics");
     TimeColumn frame_time;
     const Csv cam_file = ReadCsv(camera_csv.string(), [&](const Csv& cam, const CsvRow& row) {
-      if (s.frames_.empty()) RequireHeader(cam, WithPoseColumns({"t", "image"}));
+      if (frames_.empty()) RequireHeader(cam, WithPoseColumns({"t", "image"}));
       CameraFrame f;
       f.t = frame_time(cam, row);
       f.image = row.fields[1];
-      if (f.image.empty() || !fs::is_regular_file(s.Resolve(f.image)))
+      if (f.image.empty() || !fs::is_regular_file(Resolve(f.image)))
         throw InputError(cam.file + ":" + std::to_string(row.line) + ": image '" + f.image +
                          "' not found in the session");
       f.T_PC = ParsePose(cam, row, 2);
-      s.frames_.push_back(f);
+      frames_.push_back(f);
     });
     RequireHeader(cam_file, WithPoseColumns({"t", "image"}));
   }
+}
 
-  const fs::path gt_csv = fs::path(dir) / "groundtruth.csv";
+// groundtruth.csv (optional): t, pose of the object in P.
+void Session::LoadGroundTruth() {
+  const fs::path gt_csv = fs::path(dir_) / "groundtruth.csv";
   if (fs::exists(gt_csv)) {
     TimeColumn sample_time;
     const Csv gt_file = ReadCsv(gt_csv.string(), [&](const Csv& gt, const CsvRow& row) {
-      if (s.groundtruth_.empty()) RequireHeader(gt, WithPoseColumns({"t"}));
+      if (groundtruth_.empty()) RequireHeader(gt, WithPoseColumns({"t"}));
       GroundTruthSample g;
       g.t = sample_time(gt, row);
       g.T_PO = ParsePose(gt, row, 1);
-      s.groundtruth_.push_back(g);
+      groundtruth_.push_back(g);
     });
     RequireHeader(gt_file, WithPoseColumns({"t"}));
   }
-  return s;
 }
 
 Image8 Session::LoadImage(int i) const {
@@ -481,139 +489,6 @@ SessionModels LoadSessionModels(const Session& session, bool load_visual_meshes)
     }
   }
   return models;
-}
-
-// -----------------------------------------------------------------------------------------------
-
-SessionWriter::SessionWriter(std::string dir, SessionInfo info,
-                             std::vector<std::string> joint_names, bool overwrite, bool torques)
-    : dir_(std::move(dir)),
-      info_(std::move(info)),
-      joint_names_(std::move(joint_names)),
-      overwrite_(overwrite),
-      torques_(torques) {
-  if (joint_names_.empty()) throw InputError("session writer: no joints");
-  if (fs::exists(fs::absolute(dir_)) && !overwrite_)
-    throw InputError(dir_ + ": already exists (pass overwrite to replace it)");
-  final_ = CheckOutputFolder(dir_);
-  tmp_ = PrepareStaging(final_).string();
-  std::error_code ec;
-  fs::create_directories(fs::path(tmp_) / "images", ec);
-  if (ec) throw InputError(tmp_ + ": cannot create (" + ec.message() + ")");
-  joints_csv_ = "t";
-  for (const auto& n : joint_names_) joints_csv_ += ",q:" + n;
-  if (torques_)
-    for (const auto& n : joint_names_) joints_csv_ += ",tau:" + n;
-  joints_csv_ += "\n";
-  camera_csv_ = "t,image";
-  groundtruth_csv_ = "t";
-  for (const auto& c : kPoseColumns) camera_csv_ += "," + c, groundtruth_csv_ += "," + c;
-  camera_csv_ += "\n";
-  groundtruth_csv_ += "\n";
-}
-
-SessionWriter::~SessionWriter() {
-  if (!committed_) {
-    std::error_code ec;
-    fs::remove_all(tmp_, ec);
-  }
-}
-
-void SessionWriter::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
-                                   const Eigen::Ref<const Eigen::VectorXd>& tau) {
-  INHAND_CHECK(
-      q.size() == static_cast<long>(joint_names_.size()) && tau.size() == (torques_ ? q.size() : 0),
-      "joint sample size does not match the joint names (or torques given to a torque-free "
-      "session)");
-  INHAND_CHECK(t > last_joint_t_, "joint samples must be added in increasing time");
-  last_joint_t_ = t;
-  joints_csv_ += FormatDouble(t);
-  for (long j = 0; j < q.size(); ++j) joints_csv_ += "," + FormatDouble(q[j]);
-  for (long j = 0; j < tau.size(); ++j) joints_csv_ += "," + FormatDouble(tau[j]);
-  joints_csv_ += "\n";
-}
-
-void SessionWriter::AddCameraFrame(double t, const Image8& image, const Transform& T_PC) {
-  INHAND_CHECK(info_.camera.has_value(), "camera frames need camera intrinsics in SessionInfo");
-  INHAND_CHECK(image.width == info_.camera->width && image.height == info_.camera->height &&
-                   image.channels == 3,
-               "camera frame must be RGB of the intrinsics' size");
-  char name[64];
-  std::snprintf(name, sizeof(name), "images/frame_%06d.png", num_frames_++);
-  WriteImage((fs::path(tmp_) / name).string(), image);
-  camera_csv_ += FormatDouble(t) + "," + name + PoseFields(T_PC) + "\n";
-}
-
-void SessionWriter::AdoptCameraFrame(double t, const std::string& file,
-                                     const std::string& extension, const Vec3& p_PC,
-                                     const Quat& q_PC) {
-  INHAND_CHECK(info_.camera.has_value(), "camera frames need camera intrinsics in SessionInfo");
-  INHAND_CHECK(extension == "png" || extension == "jpg", "adopted frames are png or jpg");
-  char name[64];
-  std::snprintf(name, sizeof(name), "images/frame_%06d.%s", num_frames_++, extension.c_str());
-  std::error_code ec;
-  fs::rename(file, fs::path(tmp_) / name, ec);
-  if (ec) throw InputError(file + ": cannot move into " + tmp_ + " (" + ec.message() + ")");
-  camera_csv_ += FormatDouble(t) + "," + name + PoseFields(p_PC, q_PC) + "\n";
-}
-
-void SessionWriter::AddGroundTruth(double t, const Transform& T_PO) {
-  groundtruth_csv_ += FormatDouble(t) + PoseFields(T_PO) + "\n";
-}
-
-void SessionWriter::AddGroundTruth(double t, const Vec3& p_PO, const Quat& q_PO) {
-  groundtruth_csv_ += FormatDouble(t) + PoseFields(p_PO, q_PO) + "\n";
-}
-
-void SessionWriter::AddFile(const std::string& relative_path, const std::string& contents) {
-  const fs::path p = fs::path(tmp_) / relative_path;
-  fs::create_directories(p.parent_path());
-  WriteText(p, contents);
-}
-
-void SessionWriter::Commit() {
-  INHAND_CHECK(!committed_, "session already committed");
-  jsonf::Json doc = {
-      {"format", "inhand-session"},
-      {"version", kFormatVersion},
-      {"name", info_.name},
-      {"hand", {{"urdf", info_.hand_urdf}}},
-      {"object", {{"model", info_.object}}},
-      {"conventions",
-       {{"quaternion", "wxyz"}, {"torque", "external"}, {"length", "m"}, {"angle", "rad"}}},
-      {"initial_estimate",
-       {{"T_PO", jsonf::PoseToJson(info_.initial_T_PO)},
-        {"sigma_position", info_.sigma_position},
-        {"sigma_orientation", info_.sigma_orientation},
-        {"sigma_joint_bias", info_.sigma_joint_bias}}},
-      {"provenance", jsonf::Json::parse(info_.provenance_json)}};
-  if (!info_.packages.empty()) doc["hand"]["packages"] = info_.packages;
-  if (info_.joint_stiffness.size() == 1 && info_.joint_stiffness.count("*"))
-    doc["hand"]["joint_stiffness"] = info_.joint_stiffness.at("*");
-  else if (!info_.joint_stiffness.empty())
-    doc["hand"]["joint_stiffness"] = info_.joint_stiffness;
-  if (info_.camera) {
-    const Intrinsics& K = *info_.camera;
-    doc["camera"] = {
-        {"width", K.width},
-        {"height", K.height},
-        {"fx", K.fx},
-        {"fy", K.fy},
-        {"cx", K.cx},
-        {"cy", K.cy},
-        {"distortion",
-         {K.distortion[0], K.distortion[1], K.distortion[2], K.distortion[3], K.distortion[4]}}};
-  }
-  WriteText(fs::path(tmp_) / "session.json", doc.dump(2) + "\n");
-  WriteText(fs::path(tmp_) / "joints.csv", joints_csv_);
-  if (info_.camera) WriteText(fs::path(tmp_) / "camera.csv", camera_csv_);
-  if (groundtruth_csv_.find('\n') + 1 < groundtruth_csv_.size())
-    WriteText(fs::path(tmp_) / "groundtruth.csv", groundtruth_csv_);
-  if (num_frames_ == 0) fs::remove(fs::path(tmp_) / "images");
-  if (fs::exists(final_) && !overwrite_)
-    throw InputError(dir_ + ": appeared while writing; not replaced");
-  CommitStaging(tmp_, final_, "(session)");
-  committed_ = true;
 }
 
 }  // namespace inhand

@@ -102,6 +102,12 @@ class Session {
                                          const std::vector<int>& columns) const;
 
  private:
+  // Load's steps: session.json, then joints.csv, camera.csv and groundtruth.csv beside it.
+  static SessionInfo ReadInfo(const std::string& dir, const std::string& json_path);
+  void LoadJoints();
+  void LoadCameraFrames(const std::string& json_path);
+  void LoadGroundTruth();
+
   std::string dir_;
   SessionInfo info_;
   std::vector<std::string> joint_names_;
