@@ -204,16 +204,8 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir,
 
 }  // namespace
 
-int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
-  if (cmd.out.empty()) throw InputError("evaluate: --out DIR is required");
-  if (cmd.seeds < 1 || cmd.seeds > 1000)
-    throw InputError("--seeds is " + std::to_string(cmd.seeds) + ", expected 1..1000");
-  if (cmd.first_seed < 1 || cmd.first_seed > 1000000)
-    throw InputError("--first-seed is " + std::to_string(cmd.first_seed) + ", expected 1..1000000");
-  const int last_seed = cmd.first_seed + cmd.seeds - 1;
-  if (cmd.jobs < 1 || cmd.jobs > 64)
-    throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
-  ParseNoiseProfile(cmd.noise);
+// The scenarios --scenarios names (all when empty), each checked to exist.
+std::vector<std::string> ScenariosOf(const EvaluateCommand& cmd) {
   std::vector<std::string> scenarios;
   if (cmd.scenarios.empty()) {
     for (const ScenarioInfo& s : ListScenarios()) scenarios.push_back(s.name);
@@ -228,20 +220,13 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
       else
         scenarios.push_back(s);
   }
-  ParseModalities(cmd.modalities);  // an unknown set is an error before anything is written
-  std::string params;
-  if (!cmd.params.empty()) {
-    ReadTrackerParams(cmd.params);  // a bad file is an error before any run
-    params = fs::absolute(cmd.params).string();
-  }
-  // The evaluation folder collects runs (kept across --plan and --merge): it must be new, empty
-  // or an evaluation folder already.
-  const fs::path out_dir = CheckOutputFolder(cmd.out);
-  fs::create_directories(out_dir);
-  std::ofstream(out_dir / kOutputMarker) << "written by inhand evaluate\n";
-  std::vector<std::pair<std::string, std::pair<std::string, int>>>
-      runs;  // command, (scenario, seed)
-  // Sets with tags (a) only where the scenario's object carries tags (the pen has none).
+  return scenarios;
+}
+
+// Per scenario, the sets it runs, comma-separated: those with tags (a) only where the scenario's
+// object carries tags (the pen has none).
+std::map<std::string, std::string> SetsPerScenario(const EvaluateCommand& cmd,
+                                                   const std::vector<std::string>& scenarios) {
   std::map<std::string, std::string> sets_of;
   for (const ScenarioInfo& info : ListScenarios()) {
     if (std::find(scenarios.begin(), scenarios.end(), info.name) == scenarios.end()) continue;
@@ -261,6 +246,111 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
                        " (its object has no AprilTags)");
     sets_of[info.name] = list;
   }
+  return sets_of;
+}
+
+// Runs the commands as child processes, `jobs` at a time; the number that failed.
+int RunAll(const std::vector<std::pair<std::string, std::pair<std::string, int>>>& runs, int jobs) {
+  std::size_t next = 0;
+  int running = 0, failed = 0;
+  while (next < runs.size() || running > 0) {
+    while (running < jobs && next < runs.size()) {
+      const pid_t pid = ::fork();
+      if (pid == 0) {
+        ::execl("/bin/sh", "sh", "-c", runs[next].first.c_str(), static_cast<char*>(nullptr));
+        ::_exit(127);
+      }
+      if (pid < 0) throw InputError("evaluate: cannot start a run");
+      ++running, ++next;
+    }
+    int status = 0;
+    if (::wait(&status) > 0) {
+      --running;
+      failed += !(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+      std::cerr << "\revaluate: " << (next - static_cast<std::size_t>(running)) << "/"
+                << runs.size() << " runs done" << std::flush;
+    }
+  }
+  std::cerr << "\n";
+  if (failed) std::cerr << "evaluate: " << failed << " runs failed (see runs/*/log.txt)\n";
+  return failed;
+}
+
+// One scenario's rows of Table I (into `table` and `md`) from its runs' summaries, and its
+// Fig. 7-style plot from the first seed's run.
+void MergeScenario(const EvaluateCommand& cmd, const std::string& s, int last_seed, Json& table,
+                   std::ostream& md) {
+  std::map<std::string, std::vector<double>> pos, ori, nees;
+  for (int seed = cmd.first_seed; seed <= last_seed; ++seed) {
+    const fs::path summary = fs::path(RunDir(cmd.out, s, seed)) / "replay/summary.json";
+    if (!fs::exists(summary)) continue;
+    const Json j = jsonf::ReadFile(summary.string());
+    for (auto it = j.at("modalities").begin(); it != j.at("modalities").end(); ++it) {
+      if (!it.value().contains("terminal_position_error_mm")) continue;
+      pos[it.key()].push_back(it.value().at("terminal_position_error_mm").get<double>());
+      ori[it.key()].push_back(it.value().at("terminal_orientation_error_deg").get<double>());
+      nees[it.key()].push_back(it.value().value("nees_mean", 0.0));
+    }
+  }
+  std::map<std::string, std::pair<Stat, Stat>> bars;
+  for (const ModalitySet& m : ParseModalities(cmd.modalities)) {
+    const std::string& set = m.name;
+    if (!pos.count(set)) continue;
+    const Stat p = Stats(pos[set]), o = Stats(ori[set]), n = Stats(nees[set]);
+    bars[set] = {p, o};
+    Json cell = {{"runs", p.n},
+                 {"position_mm_mean", p.mean},
+                 {"position_mm_std", p.std},
+                 {"orientation_deg_mean", o.mean},
+                 {"orientation_deg_std", o.std},
+                 {"nees_mean", n.mean}};
+    std::ostringstream ps, os;
+    ps << std::fixed << std::setprecision(1) << p.mean << " ± " << p.std;
+    os << std::fixed << std::setprecision(1) << o.mean << " ± " << o.std;
+    const auto paper = PaperTable().find(s);
+    if (paper != PaperTable().end() && paper->second.count(set)) {
+      const PaperCell& pc = paper->second.at(set);
+      cell["paper_position_mm"] = pc.mm;
+      cell["paper_orientation_deg"] = pc.deg;
+      cell["at_or_below_paper"] = p.mean <= pc.mm && o.mean <= pc.deg;
+      ps << " (" << pc.mm << ")";
+      os << " (" << pc.deg << ")";
+    }
+    table[s][set] = cell;
+    md << "| " << s << " | " << set << " | " << p.n << " | " << ps.str() << " | " << os.str()
+       << " | " << std::fixed << std::setprecision(0) << n.mean << " |\n";
+  }
+  const std::string first = RunDir(cmd.out, s, cmd.first_seed);
+  if (fs::exists(fs::path(first) / "replay/estimates.csv") &&
+      fs::exists(fs::path(first) / "session/groundtruth.csv"))
+    PlotScenario(s, first, bars, (fs::path(cmd.out) / ("fig7_" + s + ".png")).string());
+}
+
+int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
+  if (cmd.out.empty()) throw InputError("evaluate: --out DIR is required");
+  if (cmd.seeds < 1 || cmd.seeds > 1000)
+    throw InputError("--seeds is " + std::to_string(cmd.seeds) + ", expected 1..1000");
+  if (cmd.first_seed < 1 || cmd.first_seed > 1000000)
+    throw InputError("--first-seed is " + std::to_string(cmd.first_seed) + ", expected 1..1000000");
+  const int last_seed = cmd.first_seed + cmd.seeds - 1;
+  if (cmd.jobs < 1 || cmd.jobs > 64)
+    throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
+  ParseNoiseProfile(cmd.noise);
+  const std::vector<std::string> scenarios = ScenariosOf(cmd);
+  ParseModalities(cmd.modalities);  // an unknown set is an error before anything is written
+  std::string params;
+  if (!cmd.params.empty()) {
+    ReadTrackerParams(cmd.params);  // a bad file is an error before any run
+    params = fs::absolute(cmd.params).string();
+  }
+  // The evaluation folder collects runs (kept across --plan and --merge): it must be new, empty
+  // or an evaluation folder already.
+  const fs::path out_dir = CheckOutputFolder(cmd.out);
+  fs::create_directories(out_dir);
+  std::ofstream(out_dir / kOutputMarker) << "written by inhand evaluate\n";
+  std::vector<std::pair<std::string, std::pair<std::string, int>>>
+      runs;  // command, (scenario, seed)
+  const std::map<std::string, std::string> sets_of = SetsPerScenario(cmd, scenarios);
   for (const std::string& s : scenarios)
     for (int seed = cmd.first_seed; seed <= last_seed; ++seed)
       runs.push_back(
@@ -274,31 +364,7 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
               << " --merge\n";
     return 0;
   }
-  if (!cmd.merge) {
-    // Runs as child processes, `jobs` at a time.
-    std::size_t next = 0;
-    int running = 0, failed = 0;
-    while (next < runs.size() || running > 0) {
-      while (running < cmd.jobs && next < runs.size()) {
-        const pid_t pid = ::fork();
-        if (pid == 0) {
-          ::execl("/bin/sh", "sh", "-c", runs[next].first.c_str(), static_cast<char*>(nullptr));
-          ::_exit(127);
-        }
-        if (pid < 0) throw InputError("evaluate: cannot start a run");
-        ++running, ++next;
-      }
-      int status = 0;
-      if (::wait(&status) > 0) {
-        --running;
-        failed += !(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-        std::cerr << "\revaluate: " << (next - static_cast<std::size_t>(running)) << "/"
-                  << runs.size() << " runs done" << std::flush;
-      }
-    }
-    std::cerr << "\n";
-    if (failed) std::cerr << "evaluate: " << failed << " runs failed (see runs/*/log.txt)\n";
-  }
+  if (!cmd.merge) RunAll(runs, cmd.jobs);
   // Merge: Table I with the paper's values beside ours.
   Json table = Json::object();
   std::ostringstream md;
@@ -309,52 +375,7 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
      << "NEES: mean normalised estimation error squared of the 6-D pose (consistent filter: 6).\n\n"
      << "| scenario | set | runs | position [mm] | orientation [deg] | NEES mean |\n| --- | --- | "
         "--- | --- | --- | --- |\n";
-  for (const std::string& s : scenarios) {
-    std::map<std::string, std::vector<double>> pos, ori, nees;
-    for (int seed = cmd.first_seed; seed <= last_seed; ++seed) {
-      const fs::path summary = fs::path(RunDir(cmd.out, s, seed)) / "replay/summary.json";
-      if (!fs::exists(summary)) continue;
-      const Json j = jsonf::ReadFile(summary.string());
-      for (auto it = j.at("modalities").begin(); it != j.at("modalities").end(); ++it) {
-        if (!it.value().contains("terminal_position_error_mm")) continue;
-        pos[it.key()].push_back(it.value().at("terminal_position_error_mm").get<double>());
-        ori[it.key()].push_back(it.value().at("terminal_orientation_error_deg").get<double>());
-        nees[it.key()].push_back(it.value().value("nees_mean", 0.0));
-      }
-    }
-    std::map<std::string, std::pair<Stat, Stat>> bars;
-    for (const ModalitySet& m : ParseModalities(cmd.modalities)) {
-      const std::string& set = m.name;
-      if (!pos.count(set)) continue;
-      const Stat p = Stats(pos[set]), o = Stats(ori[set]), n = Stats(nees[set]);
-      bars[set] = {p, o};
-      Json cell = {{"runs", p.n},
-                   {"position_mm_mean", p.mean},
-                   {"position_mm_std", p.std},
-                   {"orientation_deg_mean", o.mean},
-                   {"orientation_deg_std", o.std},
-                   {"nees_mean", n.mean}};
-      std::ostringstream ps, os;
-      ps << std::fixed << std::setprecision(1) << p.mean << " ± " << p.std;
-      os << std::fixed << std::setprecision(1) << o.mean << " ± " << o.std;
-      const auto paper = PaperTable().find(s);
-      if (paper != PaperTable().end() && paper->second.count(set)) {
-        const PaperCell& pc = paper->second.at(set);
-        cell["paper_position_mm"] = pc.mm;
-        cell["paper_orientation_deg"] = pc.deg;
-        cell["at_or_below_paper"] = p.mean <= pc.mm && o.mean <= pc.deg;
-        ps << " (" << pc.mm << ")";
-        os << " (" << pc.deg << ")";
-      }
-      table[s][set] = cell;
-      md << "| " << s << " | " << set << " | " << p.n << " | " << ps.str() << " | " << os.str()
-         << " | " << std::fixed << std::setprecision(0) << n.mean << " |\n";
-    }
-    const std::string first = RunDir(cmd.out, s, cmd.first_seed);
-    if (fs::exists(fs::path(first) / "replay/estimates.csv") &&
-        fs::exists(fs::path(first) / "session/groundtruth.csv"))
-      PlotScenario(s, first, bars, (fs::path(cmd.out) / ("fig7_" + s + ".png")).string());
-  }
+  for (const std::string& s : scenarios) MergeScenario(cmd, s, last_seed, table, md);
   std::ofstream(fs::path(cmd.out) / "table1.md") << md.str();
   std::ofstream(fs::path(cmd.out) / "table1.json") << table.dump(2) << "\n";
   std::cout << md.str();

@@ -24,6 +24,7 @@
 #include <mutex>
 #include <thread>
 
+#include "gui_gl.hpp"
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/match_pictures.hpp"
 #include "inhand/app/player.hpp"
@@ -33,120 +34,6 @@
 namespace inhand::app {
 
 namespace {
-
-// GL entry points of the context that draws the interface: the window's (libGL, through GLFW)
-// or the offscreen one (OSMesa). Never the renderer's direct calls: those belong to OSMesa.
-struct GuiGl {
-  void (*GenTextures)(GLsizei, GLuint*) = nullptr;
-  void (*BindTexture)(GLenum, GLuint) = nullptr;
-  void (*TexImage2D)(GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum,
-                     const void*) = nullptr;
-  void (*TexParameteri)(GLenum, GLenum, GLint) = nullptr;
-  void (*PixelStorei)(GLenum, GLint) = nullptr;
-  void (*Viewport)(GLint, GLint, GLsizei, GLsizei) = nullptr;
-  void (*ClearColor)(GLfloat, GLfloat, GLfloat, GLfloat) = nullptr;
-  void (*Clear)(GLbitfield) = nullptr;
-  void (*ReadPixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void*) = nullptr;
-  void (*ReadBuffer)(GLenum) = nullptr;
-  void (*Finish)() = nullptr;
-
-  template <typename Loader>
-  void Load(Loader load) {
-    const auto get = [&](auto& fn, const char* name) {
-      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(load(name));
-    };
-    get(GenTextures, "glGenTextures");
-    get(BindTexture, "glBindTexture");
-    get(TexImage2D, "glTexImage2D");
-    get(TexParameteri, "glTexParameteri");
-    get(PixelStorei, "glPixelStorei");
-    get(Viewport, "glViewport");
-    get(ClearColor, "glClearColor");
-    get(Clear, "glClear");
-    get(ReadPixels, "glReadPixels");
-    get(ReadBuffer, "glReadBuffer");
-    get(Finish, "glFinish");
-  }
-};
-
-struct Texture {
-  GLuint id = 0;
-  int width = 0, height = 0;
-  void Upload(const GuiGl& gl, const Image8& im) {
-    if (im.empty()) return;
-    if (id == 0) gl.GenTextures(1, &id);
-    gl.BindTexture(GL_TEXTURE_2D, id);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    const GLenum format = im.channels == 1 ? GL_LUMINANCE : GL_RGB;
-    gl.TexImage2D(GL_TEXTURE_2D, 0, im.channels == 1 ? GL_LUMINANCE : GL_RGB, im.width, im.height,
-                  0, format, GL_UNSIGNED_BYTE, im.data.data());
-    width = im.width;
-    height = im.height;
-  }
-  void Show(float max_width) const {
-    if (id == 0) {
-      ImGui::TextDisabled("(no image yet)");
-      return;
-    }
-    const float w = std::min(max_width, static_cast<float>(width));
-    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(id)),
-                 ImVec2(w, w * height / width));
-  }
-};
-
-// Runs tasks on one thread of its own, waiting for each. The player's OSMesa renderers live
-// there: Mesa's dispatch is per thread, so they never disturb the window's GLX context.
-class RenderThread {
- public:
-  RenderThread() : thread_([this] { Loop(); }) {}
-  ~RenderThread() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    cv_.notify_all();
-    thread_.join();
-  }
-  void Run(const std::function<void()>& task) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    task_ = task;
-    done_ = false;
-    error_ = nullptr;
-    cv_.notify_all();
-    cv_.wait(lock, [this] { return done_; });
-    if (error_) std::rethrow_exception(error_);
-  }
-
- private:
-  void Loop() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    for (;;) {
-      cv_.wait(lock, [this] { return stop_ || task_; });
-      if (stop_) return;
-      std::function<void()> task = std::move(task_);
-      task_ = nullptr;
-      lock.unlock();
-      std::exception_ptr error;
-      try {
-        task();
-      } catch (...) {
-        error = std::current_exception();
-      }
-      lock.lock();
-      error_ = error;
-      done_ = true;
-      cv_.notify_all();
-    }
-  }
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  std::function<void()> task_;
-  bool done_ = false, stop_ = false;
-  std::exception_ptr error_;
-  std::thread thread_;
-};
 
 enum class ActionKind { kTogglePlay, kStepSample, kStepFrame, kSeek, kRecompute, kSaveParams };
 struct Action {
@@ -348,9 +235,9 @@ void ApplyActions(Runner& runner, GuiState& state) {
 
 constexpr float kPanelWidth = 330.0f;
 
-void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
+// The left panel: playback, overlay layers, filter parameters.
+void DrawControlPanel(Runner& runner, GuiState& state, int height) {
   const Session& s = runner.session();
-  const SessionPlayer& p = runner.player();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(height)));
   ImGui::Begin("inhand", nullptr,
@@ -417,7 +304,117 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   if (!state.status.empty()) ImGui::TextWrapped("%s", state.status.c_str());
   ImGui::PopItemWidth();
   ImGui::End();
+}
 
+// One row per estimate set: position error, orientation error, position sigma over time.
+void DrawErrorPlots(const SessionPlayer& p, const GuiState& state, float avail) {
+  for (std::size_t i = 0; i < p.sets().size(); ++i) {
+    const Rgb& c = p.sets()[i].colour;
+    ImGui::PushStyleColor(ImGuiCol_PlotLines, ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f));
+    const auto& pe = state.position_error[i];
+    const auto& oe = state.orientation_error[i];
+    const auto& sp = state.sigma_position[i];
+    // Labels go inside the plots (overlay text) so three columns fit any window width.
+    const float w = (avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
+    char id[48], text[96];
+    std::snprintf(id, sizeof(id), "##pos%zu", i);
+    const bool truth = p.session().has_groundtruth();
+    if (truth)
+      std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(),
+                    pe.empty() ? 0.f : pe.back());
+    else
+      std::snprintf(text, sizeof(text), "%s: no ground truth", p.sets()[i].name.c_str());
+    ImGui::PlotLines(id, pe.data(), static_cast<int>(pe.size()), 0, text, 0.0f, FLT_MAX,
+                     ImVec2(w, 48));
+    ImGui::SameLine();
+    std::snprintf(id, sizeof(id), "##ori%zu", i);
+    if (truth)
+      std::snprintf(text, sizeof(text), "orientation error %.1f deg", oe.empty() ? 0.f : oe.back());
+    else
+      std::snprintf(text, sizeof(text), "(no ground truth)");
+    ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX,
+                     ImVec2(w, 48));
+    ImGui::SameLine();
+    std::snprintf(id, sizeof(id), "##sig%zu", i);
+    const EstimateRecord& last = p.last(i);
+    std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm\n%.1f/%.1f/%.1f deg",
+                  last.sigma_position.x() * 1000, last.sigma_position.y() * 1000,
+                  last.sigma_position.z() * 1000, last.sigma_orientation.x() * 180 / M_PI,
+                  last.sigma_orientation.y() * 180 / M_PI, last.sigma_orientation.z() * 180 / M_PI);
+    ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX,
+                     ImVec2(w, 48));
+    ImGui::PopStyleColor();
+  }
+}
+
+// One row per estimate set: joint biases, constraints, gated features, visual innovation.
+void DrawBiasPlots(const SessionPlayer& p, const GuiState& state, float avail) {
+  for (std::size_t i = 0; i < p.sets().size(); ++i) {
+    const auto& b = p.last(i).biases;
+    std::vector<float> deg(static_cast<std::size_t>(b.size()));
+    for (long j = 0; j < b.size(); ++j)
+      deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
+    const float w = (avail - 3 * ImGui::GetStyle().ItemSpacing.x) / 4;
+    const Rgb& c = p.sets()[i].colour;
+    const ImVec4 colour(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f);
+    ImGui::PushStyleColor(ImGuiCol_PlotLines, colour);
+    ImGui::PushStyleColor(ImGuiCol_PlotHistogram, colour);
+    char id[48], text[96];
+    std::snprintf(id, sizeof(id), "##bias%zu", i);
+    std::snprintf(text, sizeof(text), "%s biases [deg], +-6", p.sets()[i].name.c_str());
+    ImGui::PlotHistogram(id, deg.data(), static_cast<int>(deg.size()), 0, text, -6.0f, 6.0f,
+                         ImVec2(w, 44));
+    ImGui::SameLine();
+    std::snprintf(id, sizeof(id), "##constraints%zu", i);
+    std::snprintf(text, sizeof(text), "constraints %d",
+                  state.constraints[i].empty() ? 0 : static_cast<int>(state.constraints[i].back()));
+    ImGui::PlotLines(id, state.constraints[i].data(), static_cast<int>(state.constraints[i].size()),
+                     0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+    ImGui::SameLine();
+    std::snprintf(id, sizeof(id), "##gated%zu", i);
+    std::snprintf(text, sizeof(text), "gated features %d", p.last(i).gated);
+    ImGui::PlotLines(id, state.gated[i].data(), static_cast<int>(state.gated[i].size()), 0, text,
+                     0.0f, FLT_MAX, ImVec2(w, 44));
+    ImGui::SameLine();
+    std::snprintf(id, sizeof(id), "##innovation%zu", i);
+    std::snprintf(text, sizeof(text), "innovation (Mahal.) %.1f", p.last(i).visual_mahalanobis);
+    ImGui::PlotLines(id, state.innovation[i].data(), static_cast<int>(state.innovation[i].size()),
+                     0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
+    ImGui::PopStyleColor(2);
+  }
+}
+
+// The extracted-feature step of the last camera frame, stage by stage.
+void DrawFeatureMatching(const SessionPlayer& p, const Textures& tex, float avail) {
+  const float w = (avail - 16) / 3;
+  // A row of three titled pictures.
+  const auto row = [&](const std::array<const char*, 3>& titles,
+                       const std::array<const Texture*, 3>& pictures) {
+    for (int c = 0; c < 3; ++c) {
+      if (c) ImGui::SameLine(static_cast<float>(c) * (w + 8));
+      ImGui::Text("%s", titles[static_cast<std::size_t>(c)]);
+    }
+    for (int c = 0; c < 3; ++c) {
+      if (c) ImGui::SameLine();
+      pictures[static_cast<std::size_t>(c)]->Show(w);
+    }
+  };
+  row({"camera edges", "virtual edges", "|camera - virtual|"},
+      {&tex.camera_edges, &tex.virtual_edges, &tex.difference});
+  row({"Harris corners (kept green)", "contour pieces", "matches (RANSAC inliers green)"},
+      {&tex.corners, &tex.pieces, &tex.matches});
+  ImGui::Text("Hough votes per corner");
+  tex.votes.Show(avail);
+  const MatchResult& m = p.last_feature_step().match;
+  ImGui::Text(
+      "%zu virtual corners, %zu Hough matches, %d RANSAC inliers (inhand match writes every "
+      "stage)",
+      m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());
+}
+
+// The right: the composed picture (orbit and zoom of its 3-D view by mouse) above the tabs.
+void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
+  const SessionPlayer& p = runner.player();
   ImGui::SetNextWindowPos(ImVec2(kPanelWidth, 0));
   ImGui::SetNextWindowSize(
       ImVec2(static_cast<float>(width) - kPanelWidth, static_cast<float>(height)));
@@ -448,112 +445,15 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   }
   if (ImGui::BeginTabBar("tabs")) {
     if (ImGui::BeginTabItem("Errors and uncertainty")) {
-      for (std::size_t i = 0; i < p.sets().size(); ++i) {
-        const Rgb& c = p.sets()[i].colour;
-        ImGui::PushStyleColor(ImGuiCol_PlotLines,
-                              ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f));
-        const auto& pe = state.position_error[i];
-        const auto& oe = state.orientation_error[i];
-        const auto& sp = state.sigma_position[i];
-        // Labels go inside the plots (overlay text) so three columns fit any window width.
-        const float w = (avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
-        char id[48], text[96];
-        std::snprintf(id, sizeof(id), "##pos%zu", i);
-        const bool truth = p.session().has_groundtruth();
-        if (truth)
-          std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(),
-                        pe.empty() ? 0.f : pe.back());
-        else
-          std::snprintf(text, sizeof(text), "%s: no ground truth", p.sets()[i].name.c_str());
-        ImGui::PlotLines(id, pe.data(), static_cast<int>(pe.size()), 0, text, 0.0f, FLT_MAX,
-                         ImVec2(w, 48));
-        ImGui::SameLine();
-        std::snprintf(id, sizeof(id), "##ori%zu", i);
-        if (truth)
-          std::snprintf(text, sizeof(text), "orientation error %.1f deg",
-                        oe.empty() ? 0.f : oe.back());
-        else
-          std::snprintf(text, sizeof(text), "(no ground truth)");
-        ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX,
-                         ImVec2(w, 48));
-        ImGui::SameLine();
-        std::snprintf(id, sizeof(id), "##sig%zu", i);
-        const EstimateRecord& last = p.last(i);
-        std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm\n%.1f/%.1f/%.1f deg",
-                      last.sigma_position.x() * 1000, last.sigma_position.y() * 1000,
-                      last.sigma_position.z() * 1000, last.sigma_orientation.x() * 180 / M_PI,
-                      last.sigma_orientation.y() * 180 / M_PI,
-                      last.sigma_orientation.z() * 180 / M_PI);
-        ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX,
-                         ImVec2(w, 48));
-        ImGui::PopStyleColor();
-      }
+      DrawErrorPlots(p, state, avail);
       ImGui::EndTabItem();
     }
     if (ImGui::BeginTabItem("Biases and counts")) {
-      for (std::size_t i = 0; i < p.sets().size(); ++i) {
-        const auto& b = p.last(i).biases;
-        std::vector<float> deg(static_cast<std::size_t>(b.size()));
-        for (long j = 0; j < b.size(); ++j)
-          deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
-        const float w = (avail - 3 * ImGui::GetStyle().ItemSpacing.x) / 4;
-        const Rgb& c = p.sets()[i].colour;
-        const ImVec4 colour(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f);
-        ImGui::PushStyleColor(ImGuiCol_PlotLines, colour);
-        ImGui::PushStyleColor(ImGuiCol_PlotHistogram, colour);
-        char id[48], text[96];
-        std::snprintf(id, sizeof(id), "##bias%zu", i);
-        std::snprintf(text, sizeof(text), "%s biases [deg], +-6", p.sets()[i].name.c_str());
-        ImGui::PlotHistogram(id, deg.data(), static_cast<int>(deg.size()), 0, text, -6.0f, 6.0f,
-                             ImVec2(w, 44));
-        ImGui::SameLine();
-        std::snprintf(id, sizeof(id), "##constraints%zu", i);
-        std::snprintf(
-            text, sizeof(text), "constraints %d",
-            state.constraints[i].empty() ? 0 : static_cast<int>(state.constraints[i].back()));
-        ImGui::PlotLines(id, state.constraints[i].data(),
-                         static_cast<int>(state.constraints[i].size()), 0, text, 0.0f, FLT_MAX,
-                         ImVec2(w, 44));
-        ImGui::SameLine();
-        std::snprintf(id, sizeof(id), "##gated%zu", i);
-        std::snprintf(text, sizeof(text), "gated features %d", p.last(i).gated);
-        ImGui::PlotLines(id, state.gated[i].data(), static_cast<int>(state.gated[i].size()), 0,
-                         text, 0.0f, FLT_MAX, ImVec2(w, 44));
-        ImGui::SameLine();
-        std::snprintf(id, sizeof(id), "##innovation%zu", i);
-        std::snprintf(text, sizeof(text), "innovation (Mahal.) %.1f", p.last(i).visual_mahalanobis);
-        ImGui::PlotLines(id, state.innovation[i].data(),
-                         static_cast<int>(state.innovation[i].size()), 0, text, 0.0f, FLT_MAX,
-                         ImVec2(w, 44));
-        ImGui::PopStyleColor(2);
-      }
+      DrawBiasPlots(p, state, avail);
       ImGui::EndTabItem();
     }
     if (ImGui::BeginTabItem("Feature matching")) {
-      const float w = (avail - 16) / 3;
-      // A row of three titled pictures.
-      const auto row = [&](const std::array<const char*, 3>& titles,
-                           const std::array<const Texture*, 3>& pictures) {
-        for (int c = 0; c < 3; ++c) {
-          if (c) ImGui::SameLine(static_cast<float>(c) * (w + 8));
-          ImGui::Text("%s", titles[static_cast<std::size_t>(c)]);
-        }
-        for (int c = 0; c < 3; ++c) {
-          if (c) ImGui::SameLine();
-          pictures[static_cast<std::size_t>(c)]->Show(w);
-        }
-      };
-      row({"camera edges", "virtual edges", "|camera - virtual|"},
-          {&tex.camera_edges, &tex.virtual_edges, &tex.difference});
-      row({"Harris corners (kept green)", "contour pieces", "matches (RANSAC inliers green)"},
-          {&tex.corners, &tex.pieces, &tex.matches});
-      ImGui::Text("Hough votes per corner");
-      tex.votes.Show(avail);
-      const MatchResult& m = p.last_feature_step().match;
-      ImGui::Text(
-          "%zu virtual corners, %zu Hough matches, %d RANSAC inliers (inhand match writes every "
-          "stage)",
-          m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());
+      DrawFeatureMatching(p, tex, avail);
       ImGui::EndTabItem();
     }
     ImGui::EndTabBar();
@@ -561,15 +461,9 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   ImGui::End();
 }
 
-void SaveScreenshot(const GuiGl& gl, int width, int height, const std::string& path) {
-  Image8 img(width, height, 3);
-  std::vector<std::uint8_t> rows(static_cast<std::size_t>(width) * height * 3);
-  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-  gl.ReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
-  for (int y = 0; y < height; ++y)
-    std::copy_n(&rows[static_cast<std::size_t>(height - 1 - y) * width * 3], width * 3,
-                img.pixel(0, y));
-  WriteImage(path, img);
+void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
+  DrawControlPanel(runner, state, height);
+  DrawViews(runner, state, tex, width, height);
 }
 
 int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, GuiState& state) {

@@ -55,6 +55,111 @@ struct SetStats {
   int with_truth = 0;
   long constraints = 0;
   EstimateRecord last_with_truth;
+
+  // One sample's record (`first`: the start, whose step time is not a step's).
+  void Add(const EstimateRecord& r, bool first) {
+    if (!first) step_us.push_back(r.step_time_us);
+    if (r.visual_ms >= 0.0) visual_ms.push_back(r.visual_ms), features_used += r.visual_used;
+    constraints += r.constraints;
+    if (std::isfinite(r.nees)) nees.push_back(r.nees);
+    if (std::isfinite(r.position_error)) {
+      sq_pos += r.position_error * r.position_error;
+      sq_ori += r.orientation_error * r.orientation_error;
+      ++with_truth;
+      last_with_truth = r;
+    }
+  }
+};
+
+// estimates.csv's header: the pose, its sigma, the errors, then one bias per joint.
+void WriteEstimatesHeader(std::ostream& csv, const Session& session) {
+  csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,"
+         "position_error_mm,orientation_error_deg";
+  for (const std::string& n : session.joint_names()) csv << ",bias:" << n;
+  csv << "\n";
+}
+
+// One row of estimates.csv. The filter lets nothing non-finite into its state; should it ever,
+// no output pretends otherwise.
+void WriteEstimate(std::ostream& csv, const std::string& session, const ModalitySet& set,
+                   const EstimateRecord& r) {
+  if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() ||
+      !r.sigma_orientation.allFinite())
+    throw InputError(session + ": set " + set.name + " has a non-finite estimate at t = " +
+                     FormatDouble(r.t) + " s (a bug: please report it with this session)");
+  const Quat q(r.T_PO.linear());
+  const Vec3& p = r.T_PO.translation();
+  csv << FormatDouble(r.t) << "," << set.name;
+  for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.sigma_position.x(),
+                   r.sigma_position.y(), r.sigma_position.z(), r.sigma_orientation.x(),
+                   r.sigma_orientation.y(), r.sigma_orientation.z()})
+    csv << "," << FormatDouble(v);
+  csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
+      << ","
+      << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "");
+  for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
+  csv << "\n";
+}
+
+// summary.json's entry for one set: its costs, what its tracker did, and, against the ground
+// truth, its errors and their consistency.
+Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& ts, int n) {
+  Json s = {
+      {"torque", set.torque},
+      {"tags", set.tags},
+      {"features", set.features},
+      {"step_time_us_median", Median(st.step_us)},
+      {"step_time_us_p95", Percentile(st.step_us, 0.95)},
+      {"visual_step_ms_median", st.visual_ms.empty() ? Json(nullptr) : Json(Median(st.visual_ms))},
+      {"visual_updates", st.visual_ms.size()},
+      {"features_used", st.features_used},
+      {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
+  s["images_fused"] = ts.images_fused;
+  s["relocalizations"] = ts.relocalizations;
+  s["images_features_lost"] = ts.images_features_lost;
+  s["images_tags_elsewhere"] = ts.images_tags_elsewhere;
+  s["images_dropped"] = ts.images_dropped_late + ts.images_dropped_busy + ts.images_rejected;
+  s["joint_samples_dropped"] = ts.samples_dropped + ts.samples_rejected;
+  if (st.with_truth == 0) return s;
+  // At the last sample the ground truth covers.
+  s["terminal_position_error_mm"] = st.last_with_truth.position_error * 1000;
+  s["terminal_orientation_error_deg"] = st.last_with_truth.orientation_error * 180 / M_PI;
+  const Vec3 dp = st.last_with_truth.position_error_O * 1000,
+             dr = st.last_with_truth.orientation_error_O * (180 / M_PI);
+  s["terminal_position_error_object_axes_mm"] = {dp.x(), dp.y(), dp.z()};
+  s["terminal_orientation_error_object_axes_deg"] = {dr.x(), dr.y(), dr.z()};
+  s["rms_position_error_mm"] = std::sqrt(st.sq_pos / st.with_truth) * 1000;
+  s["rms_orientation_error_deg"] = std::sqrt(st.sq_ori / st.with_truth) * 180 / M_PI;
+  // Consistency: the NEES of a consistent filter follows χ²₆ (mean 6; 95 % in [1.24, 14.45]).
+  double mean = 0.0;
+  long inside = 0;
+  for (double v : st.nees) mean += v, inside += v >= 1.237 && v <= 14.449;
+  s["nees_mean"] = st.nees.empty() ? 0.0 : mean / static_cast<double>(st.nees.size());
+  s["nees_within_95_percent_bounds"] =
+      st.nees.empty() ? 0.0 : double(inside) / static_cast<double>(st.nees.size());
+  return s;
+}
+
+// The progress bar on a terminal: redrawn when the percentage changes.
+class ProgressBar {
+ public:
+  ProgressBar() : tty_(::isatty(STDERR_FILENO)) {}
+  void Show(int k, int n) {
+    const int percent = static_cast<int>(100.0 * k / n);
+    if (!tty_ || (percent == shown_ && k != n)) return;
+    shown_ = percent;
+    const int width = 40, done = static_cast<int>(std::lround(width * double(k) / n));
+    std::fprintf(stderr, "\rreplay [%s%s] %3d%%",
+                 std::string(static_cast<std::size_t>(done), '#').c_str(),
+                 std::string(static_cast<std::size_t>(width - done), ' ').c_str(), percent);
+  }
+  void End() {
+    if (tty_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool tty_;
+  int shown_ = -1;
 };
 
 // The annotated pictures: drawn, encoded and written in capture order, on a thread of their own
@@ -138,6 +243,25 @@ class Pictures {
 
 }  // namespace
 
+// What the replay wrote, and per set its terminal error (against the truth) and median step.
+void PrintOutcome(const Session& session, const std::string& out,
+                  const std::vector<ModalitySet>& sets, const Json& per_set) {
+  const int n = session.num_samples();
+  const auto& frames = session.camera_frames();
+  std::cout << "replay of " << session.info().name << " (" << n << " samples, " << frames.size()
+            << " frames) written to " << out << "\n";
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const Json& s = per_set[sets[i].name];
+    std::cout << "  " << sets[i].name << ": ";
+    if (s.contains("terminal_position_error_mm"))
+      std::cout << "terminal error " << std::fixed << std::setprecision(1)
+                << s["terminal_position_error_mm"].get<double>() << " mm / "
+                << s["terminal_orientation_error_deg"].get<double>() << " deg, ";
+    std::cout << "median step " << std::setprecision(0) << s["step_time_us_median"].get<double>()
+              << " us\n";
+  }
+}
+
 int RunReplay(const ReplayCommand& cmd) {
   if (cmd.out.empty()) throw InputError("replay: --out DIR is required");
   Session session = Session::Load(cmd.session);
@@ -161,10 +285,7 @@ int RunReplay(const ReplayCommand& cmd) {
   StagedOutput out(cmd.out, {cmd.session, cmd.params}, "replay");
   if (cmd.frames) fs::create_directories(out / "frames");
   std::ofstream csv(out / "estimates.csv");
-  csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,"
-         "position_error_mm,orientation_error_deg";
-  for (const std::string& n : session.joint_names()) csv << ",bias:" << n;
-  csv << "\n";
+  WriteEstimatesHeader(csv, session);
 
   std::unique_ptr<VideoWriter> video;
   std::unique_ptr<McapExport> mcap;
@@ -194,9 +315,8 @@ int RunReplay(const ReplayCommand& cmd) {
   if (want_pictures) drawn = std::make_unique<Pictures>(player, cmd.jobs > 1, emit);
   std::vector<SetStats> stats(sets.size());
   std::vector<EstimateRecord> records;
-  const bool tty = ::isatty(STDERR_FILENO);
+  ProgressBar progress;
   const auto wall_start = std::chrono::steady_clock::now();
-  int shown = -1;
   for (int k = 0; k < n;) {
     // A block of samples up to the next camera frame (or the next picture of the 3-D view).
     int max_samples = 256;
@@ -209,39 +329,8 @@ int RunReplay(const ReplayCommand& cmd) {
     for (int s = k; s < k + count; ++s) {
       const EstimateRecord* row = &records[static_cast<std::size_t>(s - k) * sets.size()];
       for (std::size_t i = 0; i < sets.size(); ++i) {
-        const EstimateRecord& r = row[i];
-        // The filter lets nothing non-finite into its state; should it ever, no output pretends
-        // otherwise.
-        if (!r.T_PO.matrix().allFinite() || !r.sigma_position.allFinite() ||
-            !r.sigma_orientation.allFinite())
-          throw InputError(cmd.session + ": set " + sets[i].name +
-                           " has a non-finite estimate at t = " + FormatDouble(r.t) +
-                           " s (a bug: please report it with this session)");
-        const Quat q(r.T_PO.linear());
-        const Vec3& p = r.T_PO.translation();
-        csv << FormatDouble(r.t) << "," << sets[i].name;
-        for (double v : {p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), r.sigma_position.x(),
-                         r.sigma_position.y(), r.sigma_position.z(), r.sigma_orientation.x(),
-                         r.sigma_orientation.y(), r.sigma_orientation.z()})
-          csv << "," << FormatDouble(v);
-        csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
-            << ","
-            << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI)
-                                                   : "");
-        for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
-        csv << "\n";
-        SetStats& st = stats[i];
-        if (s > 0) st.step_us.push_back(r.step_time_us);
-        if (r.visual_ms >= 0.0)
-          st.visual_ms.push_back(r.visual_ms), st.features_used += r.visual_used;
-        st.constraints += r.constraints;
-        if (std::isfinite(r.nees)) st.nees.push_back(r.nees);
-        if (std::isfinite(r.position_error)) {
-          st.sq_pos += r.position_error * r.position_error;
-          st.sq_ori += r.orientation_error * r.orientation_error;
-          ++st.with_truth;
-          st.last_with_truth = r;
-        }
+        WriteEstimate(csv, cmd.session, sets[i], row[i]);
+        stats[i].Add(row[i], s == 0);
       }
       // Only the block's last sample captures frames; the player stands there.
       if (mcap) mcap->AddSample(s, row, s == k + count - 1 ? player.last_frame() : -1);
@@ -256,17 +345,10 @@ int RunReplay(const ReplayCommand& cmd) {
       drawn->Add(FrameComposer::Capture(player, -1, t), pictures++);
       next_picture_t = session.t(0) + pictures / fps;
     }
-    const int percent = static_cast<int>(100.0 * k / n);
-    if (tty && (percent != shown || k == n)) {
-      shown = percent;
-      const int width = 40, done = static_cast<int>(std::lround(width * double(k) / n));
-      std::fprintf(stderr, "\rreplay [%s%s] %3d%%",
-                   std::string(static_cast<std::size_t>(done), '#').c_str(),
-                   std::string(static_cast<std::size_t>(width - done), ' ').c_str(), percent);
-    }
+    progress.Show(k, n);
   }
   if (drawn) drawn->Finish();
-  if (tty) std::fprintf(stderr, "\n");
+  progress.End();
   if (video) video->Close();
   if (mcap) mcap->Close();
   csv.close();
@@ -289,62 +371,14 @@ int RunReplay(const ReplayCommand& cmd) {
       {"frames_before_first_sample", player.input_report().frames_before_first_sample},
       {"samples_without_truth", player.input_report().samples_without_truth}};
   Json per_set = Json::object();
-  for (std::size_t i = 0; i < sets.size(); ++i) {
-    const SetStats& st = stats[i];
-    Json s = {{"torque", sets[i].torque},
-              {"tags", sets[i].tags},
-              {"features", sets[i].features},
-              {"step_time_us_median", Median(st.step_us)},
-              {"step_time_us_p95", Percentile(st.step_us, 0.95)},
-              {"visual_step_ms_median",
-               st.visual_ms.empty() ? Json(nullptr) : Json(Median(st.visual_ms))},
-              {"visual_updates", st.visual_ms.size()},
-              {"features_used", st.features_used},
-              {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
-    const TrackerStats ts = player.tracker(i).stats();
-    s["images_fused"] = ts.images_fused;
-    s["relocalizations"] = ts.relocalizations;
-    s["images_features_lost"] = ts.images_features_lost;
-    s["images_tags_elsewhere"] = ts.images_tags_elsewhere;
-    s["images_dropped"] = ts.images_dropped_late + ts.images_dropped_busy + ts.images_rejected;
-    s["joint_samples_dropped"] = ts.samples_dropped + ts.samples_rejected;
-    if (st.with_truth > 0) {
-      // At the last sample the ground truth covers.
-      s["terminal_position_error_mm"] = st.last_with_truth.position_error * 1000;
-      s["terminal_orientation_error_deg"] = st.last_with_truth.orientation_error * 180 / M_PI;
-      const Vec3 dp = st.last_with_truth.position_error_O * 1000,
-                 dr = st.last_with_truth.orientation_error_O * (180 / M_PI);
-      s["terminal_position_error_object_axes_mm"] = {dp.x(), dp.y(), dp.z()};
-      s["terminal_orientation_error_object_axes_deg"] = {dr.x(), dr.y(), dr.z()};
-      s["rms_position_error_mm"] = std::sqrt(st.sq_pos / st.with_truth) * 1000;
-      s["rms_orientation_error_deg"] = std::sqrt(st.sq_ori / st.with_truth) * 180 / M_PI;
-      // Consistency: the NEES of a consistent filter follows χ²₆ (mean 6; 95 % in [1.24, 14.45]).
-      double mean = 0.0;
-      long inside = 0;
-      for (double v : st.nees) mean += v, inside += v >= 1.237 && v <= 14.449;
-      s["nees_mean"] = st.nees.empty() ? 0.0 : mean / static_cast<double>(st.nees.size());
-      s["nees_within_95_percent_bounds"] =
-          st.nees.empty() ? 0.0 : double(inside) / static_cast<double>(st.nees.size());
-    }
-    per_set[sets[i].name] = s;
-  }
+  for (std::size_t i = 0; i < sets.size(); ++i)
+    per_set[sets[i].name] = SetSummary(sets[i], stats[i], player.tracker(i).stats(), n);
   summary["modalities"] = per_set;
   std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
   std::ofstream(out / "params.json") << TrackerParamsToJson(player.params()) << "\n";
   out.Commit();
 
-  std::cout << "replay of " << session.info().name << " (" << n << " samples, " << frames.size()
-            << " frames) written to " << cmd.out << "\n";
-  for (std::size_t i = 0; i < sets.size(); ++i) {
-    const Json& s = per_set[sets[i].name];
-    std::cout << "  " << sets[i].name << ": ";
-    if (s.contains("terminal_position_error_mm"))
-      std::cout << "terminal error " << std::fixed << std::setprecision(1)
-                << s["terminal_position_error_mm"].get<double>() << " mm / "
-                << s["terminal_orientation_error_deg"].get<double>() << " deg, ";
-    std::cout << "median step " << std::setprecision(0) << s["step_time_us_median"].get<double>()
-              << " us\n";
-  }
+  PrintOutcome(session, cmd.out, sets, per_set);
   return 0;
 }
 

@@ -66,6 +66,127 @@ std::vector<std::uint8_t> OverlayPainter::Silhouette(const Transform& T_PO, cons
   return mask;
 }
 
+namespace {
+
+// One estimate's silhouette (its bit in `masks`): tinted and/or outlined inside its bounding box;
+// dashed outlines for the ground truth.
+void DrawSilhouette(cv::Mat& img, const std::vector<std::uint16_t>& masks,
+                    std::vector<std::uint8_t>& mask_data, const Intrinsics& K,
+                    const OverlayEstimate& e, std::uint16_t bit, const OverlayLayers& layers) {
+  for (std::size_t p = 0; p < mask_data.size(); ++p) mask_data[p] = (masks[p] & bit) != 0;
+  const cv::Mat mask(K.height, K.width, CV_8UC1, mask_data.data());
+  const cv::Rect box = cv::boundingRect(mask);
+  if (box.empty()) return;
+  if (layers.silhouette && !e.dashed) {
+    cv::Mat roi = img(box), blended;
+    cv::addWeighted(roi, 0.72, cv::Mat(box.size(), CV_8UC3, Colour(e.colour)), 0.28, 0.0, blended);
+    blended.copyTo(roi, mask(box));
+  }
+  if (layers.outline) {
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(mask(box).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE,
+                     box.tl());
+    if (e.dashed)
+      DrawDashedContours(img, contours, Colour(e.colour));
+    else
+      cv::drawContours(img, contours, -1, Colour(e.colour), 2, cv::LINE_AA);
+  }
+}
+
+// The 3σ ellipse of the position, projected to first order, around its projection `o`.
+void DrawUncertainty(cv::Mat& img, const Transform& T_CP, const Intrinsics& K,
+                     const OverlayEstimate& e, const Vec2& o, const cv::Scalar& colour) {
+  const Vec3 X_C = T_CP * e.T_PO.translation();
+  const Eigen::Matrix<double, 2, 3> J = K.ProjectJacobian(X_C) * T_CP.linear();
+  const Eigen::Matrix2d S = J * e.position_covariance * J.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
+  const Eigen::Vector2d ev = eig.eigenvalues().cwiseMax(0.0);
+  const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+  const double angle = std::atan2(axis.y(), axis.x()) * 180.0 / M_PI;
+  const cv::Size axes(static_cast<int>(std::lround(3.0 * std::sqrt(ev[1]) * (1 << kShift))),
+                      static_cast<int>(std::lround(3.0 * std::sqrt(ev[0]) * (1 << kShift))));
+  cv::ellipse(img, Fx(o), axes, angle, 0, 360, colour, 1, cv::LINE_AA, kShift);
+}
+
+// A torque contact's friction cone, as its silhouette: two generators in the plane of the normal
+// and the view ray, from the contact's projection `p`.
+void DrawFrictionCone(cv::Mat& img, const OverlayFrame& frame, const Transform& T_CP,
+                      const OverlayContact& c, const Vec2& p, const cv::Scalar& colour) {
+  const Intrinsics& K = frame.K;
+  const Vec3 view = (c.c_o_P - frame.T_PC.translation()).normalized();
+  Vec3 side = c.normal_P.cross(view);
+  if (side.norm() > 1e-6) {
+    side = side.cross(c.normal_P).normalized();
+    const double a = frame.friction_cone_deg * M_PI / 180.0, L = 0.02;
+    for (double s : {-1.0, 1.0}) {
+      Vec2 q;
+      if (ProjectP(T_CP, K, c.c_o_P + L * (std::cos(a) * c.normal_P + s * std::sin(a) * side), q))
+        Line(img, p, q, colour, 1);
+    }
+  }
+}
+
+// A contact's marker by kind: kinematic filled, torque ringed, rejected crossed, candidate a dot.
+void DrawContactMarker(cv::Mat& img, const OverlayContact& c, const Vec2& p,
+                       const cv::Scalar& colour) {
+  switch (c.kind) {
+    case OverlayContact::Kind::kKinematic:
+      cv::circle(img, Fx(p), 5 << kShift, colour, cv::FILLED, cv::LINE_AA, kShift);
+      cv::circle(img, Fx(p), 5 << kShift, cv::Scalar(255, 255, 255), 1, cv::LINE_AA, kShift);
+      break;
+    case OverlayContact::Kind::kTorque:
+      cv::circle(img, Fx(p), 6 << kShift, colour, 2, cv::LINE_AA, kShift);
+      break;
+    case OverlayContact::Kind::kRejected:
+      Line(img, p + Vec2(-4, -4), p + Vec2(4, 4), colour, 1);
+      Line(img, p + Vec2(-4, 4), p + Vec2(4, -4), colour, 1);
+      break;
+    case OverlayContact::Kind::kCandidate:
+      cv::circle(img, Fx(p), 2 << kShift, colour, cv::FILLED, cv::LINE_AA, kShift);
+      break;
+  }
+}
+
+// The HUD's lines, wrapped to the picture's width, on darkened boxes from the top-left.
+void DrawHud(cv::Mat& img, const std::vector<std::string>& hud) {
+  int y = 6;
+  std::vector<std::string> lines;
+  for (const std::string& line : hud)
+    for (std::string& piece : WrapHudLine(line, img.cols - 16)) lines.push_back(std::move(piece));
+  for (const std::string& line : lines) {
+    int base = 0;
+    const cv::Size sz = cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, kHudScale, 1, &base);
+    cv::Mat roi = img(cv::Rect(4, y, std::min(sz.width + 8, img.cols - 4),
+                               std::min(sz.height + base + 6, img.rows - y)));
+    roi = roi * 0.35;
+    cv::putText(img, line, cv::Point(8, y + sz.height + 3), cv::FONT_HERSHEY_SIMPLEX, kHudScale,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    y += sz.height + base + 8;
+    if (y > img.rows - 20) break;
+  }
+}
+
+// The legend: one swatch per estimate, bottom-left.
+void DrawLegend(cv::Mat& img, const std::vector<OverlayEstimate>& estimates) {
+  int x = 8;
+  const int y = img.rows - 10;
+  for (const OverlayEstimate& e : estimates) {
+    int base = 0;
+    const cv::Size sz = cv::getTextSize(e.name, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &base);
+    cv::rectangle(img, cv::Rect(x - 3, y - sz.height - 5, sz.width + 26, sz.height + 10),
+                  cv::Scalar(255, 255, 255), cv::FILLED);
+    if (e.dashed)
+      cv::line(img, cv::Point(x, y - 4), cv::Point(x + 14, y - 4), Colour(e.colour), 2);
+    else
+      cv::rectangle(img, cv::Rect(x, y - 10, 14, 10), Colour(e.colour), cv::FILLED);
+    cv::putText(img, e.name, cv::Point(x + 18, y), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    x += sz.width + 34;
+  }
+}
+
+}  // namespace
+
 Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& layers) {
   const Intrinsics& K = frame.K;
   INHAND_CHECK(frame.camera.width == K.width && frame.camera.height == K.height &&
@@ -79,27 +200,6 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
   // silhouette comes from one render (a bit each, 16 at a time); tint and contours work inside
   // its bounding box.
   std::vector<std::uint8_t> mask_data(static_cast<std::size_t>(K.width) * K.height);
-  const auto silhouette = [&](const OverlayEstimate& e, std::uint16_t bit) {
-    for (std::size_t p = 0; p < mask_data.size(); ++p) mask_data[p] = (masks_[p] & bit) != 0;
-    const cv::Mat mask(K.height, K.width, CV_8UC1, mask_data.data());
-    const cv::Rect box = cv::boundingRect(mask);
-    if (box.empty()) return;
-    if (layers.silhouette && !e.dashed) {
-      cv::Mat roi = img(box), blended;
-      cv::addWeighted(roi, 0.72, cv::Mat(box.size(), CV_8UC3, Colour(e.colour)), 0.28, 0.0,
-                      blended);
-      blended.copyTo(roi, mask(box));
-    }
-    if (layers.outline) {
-      std::vector<std::vector<cv::Point>> contours;
-      cv::findContours(mask(box).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE,
-                       box.tl());
-      if (e.dashed)
-        DrawDashedContours(img, contours, Colour(e.colour));
-      else
-        cv::drawContours(img, contours, -1, Colour(e.colour), 2, cv::LINE_AA);
-    }
-  };
   for (std::size_t e0 = 0; e0 < frame.estimates.size() && (layers.silhouette || layers.outline);
        e0 += 16) {
     Scene scene;
@@ -114,26 +214,16 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     }
     renderer_.RenderMasks(scene, masks_);
     for (std::size_t i = e0; i < e1; ++i)
-      silhouette(frame.estimates[i], static_cast<std::uint16_t>(1u << (i - e0)));
+      DrawSilhouette(img, masks_, mask_data, K, frame.estimates[i],
+                     static_cast<std::uint16_t>(1u << (i - e0)), layers);
   }
 
   for (const OverlayEstimate& e : frame.estimates) {
     const cv::Scalar colour = Colour(e.colour);
     Vec2 o;
     const bool origin_visible = ProjectP(T_CP, K, e.T_PO.translation(), o);
-    if (layers.uncertainty && origin_visible && e.position_covariance.norm() > 0.0) {
-      // 3σ ellipse of the position, projected to first order.
-      const Vec3 X_C = T_CP * e.T_PO.translation();
-      const Eigen::Matrix<double, 2, 3> J = K.ProjectJacobian(X_C) * T_CP.linear();
-      const Eigen::Matrix2d S = J * e.position_covariance * J.transpose();
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
-      const Eigen::Vector2d ev = eig.eigenvalues().cwiseMax(0.0);
-      const Eigen::Vector2d axis = eig.eigenvectors().col(1);
-      const double angle = std::atan2(axis.y(), axis.x()) * 180.0 / M_PI;
-      const cv::Size axes(static_cast<int>(std::lround(3.0 * std::sqrt(ev[1]) * (1 << kShift))),
-                          static_cast<int>(std::lround(3.0 * std::sqrt(ev[0]) * (1 << kShift))));
-      cv::ellipse(img, Fx(o), axes, angle, 0, 360, colour, 1, cv::LINE_AA, kShift);
-    }
+    if (layers.uncertainty && origin_visible && e.position_covariance.norm() > 0.0)
+      DrawUncertainty(img, T_CP, K, e, o, colour);
     if (layers.axes && origin_visible) {
       const Rgb axis_colours[3] = {{230, 30, 30}, {30, 190, 30}, {30, 60, 230}};
       for (int a = 0; a < 3; ++a) {
@@ -145,45 +235,15 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     for (const OverlayContact& c : e.contacts) {
       Vec2 p;
       if (!ProjectP(T_CP, K, c.c_o_P, p)) continue;
-      if (layers.cones && c.kind == OverlayContact::Kind::kTorque) {
-        // The cone's silhouette: two generators in the plane of the normal and the view ray.
-        const Vec3 view = (c.c_o_P - frame.T_PC.translation()).normalized();
-        Vec3 side = c.normal_P.cross(view);
-        if (side.norm() > 1e-6) {
-          side = side.cross(c.normal_P).normalized();
-          const double a = frame.friction_cone_deg * M_PI / 180.0, L = 0.02;
-          for (double s : {-1.0, 1.0}) {
-            Vec2 q;
-            if (ProjectP(T_CP, K, c.c_o_P + L * (std::cos(a) * c.normal_P + s * std::sin(a) * side),
-                         q))
-              Line(img, p, q, colour, 1);
-          }
-        }
-      }
+      if (layers.cones && c.kind == OverlayContact::Kind::kTorque)
+        DrawFrictionCone(img, frame, T_CP, c, p, colour);
       // Forces of torque-confirmed contacts only: a rejected candidate's λ̄ is no force.
       if (layers.forces && c.kind == OverlayContact::Kind::kTorque && c.force_P.norm() > 1e-9) {
         Vec2 q;
         if (ProjectP(T_CP, K, c.c_o_P + frame.force_scale * c.force_P, q))
           cv::arrowedLine(img, Fx(p), Fx(q), colour, 2, cv::LINE_AA, kShift, 0.25);
       }
-      if (layers.contacts) {
-        switch (c.kind) {
-          case OverlayContact::Kind::kKinematic:
-            cv::circle(img, Fx(p), 5 << kShift, colour, cv::FILLED, cv::LINE_AA, kShift);
-            cv::circle(img, Fx(p), 5 << kShift, cv::Scalar(255, 255, 255), 1, cv::LINE_AA, kShift);
-            break;
-          case OverlayContact::Kind::kTorque:
-            cv::circle(img, Fx(p), 6 << kShift, colour, 2, cv::LINE_AA, kShift);
-            break;
-          case OverlayContact::Kind::kRejected:
-            Line(img, p + Vec2(-4, -4), p + Vec2(4, 4), colour, 1);
-            Line(img, p + Vec2(-4, 4), p + Vec2(4, -4), colour, 1);
-            break;
-          case OverlayContact::Kind::kCandidate:
-            cv::circle(img, Fx(p), 2 << kShift, colour, cv::FILLED, cv::LINE_AA, kShift);
-            break;
-        }
-      }
+      if (layers.contacts) DrawContactMarker(img, c, p, colour);
     }
     if (layers.features) {
       for (const OverlayFeature& f : e.features) {
@@ -196,41 +256,8 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     }
   }
 
-  if (layers.hud && !frame.hud.empty()) {
-    int y = 6;
-    std::vector<std::string> lines;
-    for (const std::string& line : frame.hud)
-      for (std::string& piece : WrapHudLine(line, img.cols - 16)) lines.push_back(std::move(piece));
-    for (const std::string& line : lines) {
-      int base = 0;
-      const cv::Size sz = cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, kHudScale, 1, &base);
-      cv::Mat roi = img(cv::Rect(4, y, std::min(sz.width + 8, img.cols - 4),
-                                 std::min(sz.height + base + 6, img.rows - y)));
-      roi = roi * 0.35;
-      cv::putText(img, line, cv::Point(8, y + sz.height + 3), cv::FONT_HERSHEY_SIMPLEX, kHudScale,
-                  cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-      y += sz.height + base + 8;
-      if (y > img.rows - 20) break;
-    }
-  }
-  // The legend: one swatch per estimate, bottom-left.
-  if (layers.hud && !frame.estimates.empty()) {
-    int x = 8;
-    const int y = img.rows - 10;
-    for (const OverlayEstimate& e : frame.estimates) {
-      int base = 0;
-      const cv::Size sz = cv::getTextSize(e.name, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &base);
-      cv::rectangle(img, cv::Rect(x - 3, y - sz.height - 5, sz.width + 26, sz.height + 10),
-                    cv::Scalar(255, 255, 255), cv::FILLED);
-      if (e.dashed)
-        cv::line(img, cv::Point(x, y - 4), cv::Point(x + 14, y - 4), Colour(e.colour), 2);
-      else
-        cv::rectangle(img, cv::Rect(x, y - 10, 14, 10), Colour(e.colour), cv::FILLED);
-      cv::putText(img, e.name, cv::Point(x + 18, y), cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                  cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-      x += sz.width + 34;
-    }
-  }
+  if (layers.hud && !frame.hud.empty()) DrawHud(img, frame.hud);
+  if (layers.hud && !frame.estimates.empty()) DrawLegend(img, frame.estimates);
   return out;
 }
 
