@@ -158,6 +158,7 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
          {r.sigma_orientation.x() * 180 / M_PI, r.sigma_orientation.y() * 180 / M_PI,
           r.sigma_orientation.z() * 180 / M_PI}},
         {"constraints", r.constraints},
+        {"penetration_mm", r.penetration * 1000},
         {"slipping", r.slipping},
         {"features_lost", r.memory.features_lost()},
         {"tags_elsewhere", r.memory.tag_disagreements > 0}};

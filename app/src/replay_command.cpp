@@ -54,6 +54,7 @@ struct SetStats {
   double sq_pos = 0.0, sq_ori = 0.0;
   int with_truth = 0;
   long constraints = 0;
+  double penetration_sum = 0.0, penetration_max = 0.0, penetration_last = 0.0;  // [m]
   EstimateRecord last_with_truth;
 
   // One sample's record (`first`: the start, whose step time is not a step's).
@@ -61,6 +62,9 @@ struct SetStats {
     if (!first) step_us.push_back(r.step_time_us);
     if (r.visual_ms >= 0.0) visual_ms.push_back(r.visual_ms), features_used += r.visual_used;
     constraints += r.constraints;
+    penetration_sum += r.penetration;
+    penetration_max = std::max(penetration_max, r.penetration);
+    penetration_last = r.penetration;
     if (std::isfinite(r.nees)) nees.push_back(r.nees);
     if (std::isfinite(r.position_error)) {
       sq_pos += r.position_error * r.position_error;
@@ -71,10 +75,11 @@ struct SetStats {
   }
 };
 
-// estimates.csv's header: the pose, its sigma, the errors, then one bias per joint.
+// estimates.csv's header: the pose, its sigma, the errors, the deepest link inside the estimate,
+// then one bias per joint.
 void WriteEstimatesHeader(std::ostream& csv, const Session& session) {
   csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,"
-         "position_error_mm,orientation_error_deg";
+         "position_error_mm,orientation_error_deg,penetration_mm";
   for (const std::string& n : session.joint_names()) csv << ",bias:" << n;
   csv << "\n";
 }
@@ -96,7 +101,8 @@ void WriteEstimate(std::ostream& csv, const std::string& session, const Modality
     csv << "," << FormatDouble(v);
   csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
       << ","
-      << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "");
+      << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "")
+      << "," << FormatDouble(r.penetration * 1000);
   for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
   csv << "\n";
 }
@@ -113,7 +119,11 @@ Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& 
       {"visual_step_ms_median", st.visual_ms.empty() ? Json(nullptr) : Json(Median(st.visual_ms))},
       {"visual_updates", st.visual_ms.size()},
       {"features_used", st.features_used},
-      {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0}};
+      {"constraints_per_step_mean", n ? double(st.constraints) / n : 0.0},
+      // The deepest link inside the estimated object: over the samples, and at the end.
+      {"penetration_mm_mean", n ? st.penetration_sum / n * 1000 : 0.0},
+      {"penetration_mm_max", st.penetration_max * 1000},
+      {"terminal_penetration_mm", st.penetration_last * 1000}};
   s["images_fused"] = ts.images_fused;
   s["relocalizations"] = ts.relocalizations;
   s["images_features_lost"] = ts.images_features_lost;

@@ -105,6 +105,24 @@ TEST(Filter, PenetratingObjectIsPushedOutAlongTheNormal) {
   EXPECT_LT(filter.biases().norm(), 1e-6);  // the finger was held fixed
 }
 
+// The estimate's own penetration (FilterTrace::penetration): the depth of the deepest link inside
+// the object at the step's contact query, here 5 mm by construction (a 20 mm ball 25 mm above the
+// distal link's 10 mm capsule) and the same as the query's distance; after the update has pushed
+// the ball out, the next step's is ~0; a ball 3 cm clear of the finger reads 0, not a negative.
+TEST(Filter, TheTraceSaysHowDeepTheHandLiesInsideTheEstimate) {
+  FingerScene s;
+  const Transform T0 = At(Vec3(0, 0.07, 0.025));
+  Filter filter = s.Started(T0, PerfectContacts(), false);
+  filter.Step(s.q0, Eigen::Vector2d::Zero(), 0.001);
+  EXPECT_NEAR(filter.trace().penetration, 0.005, 1e-6);
+  EXPECT_NEAR(filter.trace().penetration, -s.Distance(s.q0, T0), 1e-12);
+  filter.Step(s.q0, Eigen::Vector2d::Zero(), 0.001);
+  EXPECT_LT(filter.trace().penetration, 1e-4);
+  Filter clear = s.Started(At(Vec3(0, 0.07, 0.06)), PerfectContacts(), false);
+  clear.Step(s.q0, Eigen::Vector2d::Zero(), 0.001);
+  EXPECT_EQ(clear.trace().penetration, 0.0);
+}
+
 TEST(Filter, TorqueConfirmedContactPullsTheObjectIntoTouch) {
   FingerScene s;
   // 2 mm above the distal link's far end (within the 3 mm candidate range), out of the

@@ -36,6 +36,7 @@ void FilterTrace::Clear() {
   num_gated = 0;
   numeric_events = 0;
   slipping = false;
+  penetration = 0.0;
 }
 
 Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams& params,

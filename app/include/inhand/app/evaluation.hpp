@@ -22,6 +22,7 @@ struct EstimateRecord {
   Vec3 orientation_error_O =
       Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // [rad], R_gtᵀ R̂ = Exp(·)
   double step_time_us = 0.0;
+  double penetration = 0.0;  // [m] FilterTrace::penetration: the deepest link inside the estimate
   int constraints = 0;
   int contacts = 0;
   int gated = 0;                    // measurement blocks rejected by a gate in this sample

@@ -60,6 +60,10 @@ struct FilterTrace {
   int numeric_events = 0;               // ill-conditioned S, non-finite inputs or results (skipped:
                                         // nothing non-finite enters the state)
   bool slipping = false;                // Predict grew the random walk: the grip was too weak
+  // [m] how deep the deepest link lies inside the object at the estimate the step's last contact
+  // query saw (before that query's update; 0: no link inside). A hand cannot be inside what it
+  // holds: the estimate's own measure of impossibility, free (the step runs that query anyway).
+  double penetration = 0.0;
   void Clear();
 };
 
