@@ -159,6 +159,7 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
           r.sigma_orientation.z() * 180 / M_PI}},
         {"constraints", r.constraints},
         {"penetration_mm", r.penetration * 1000},
+        {"unexplained_torque_Nm", r.unexplained_torque},
         {"slipping", r.slipping},
         {"features_lost", r.memory.features_lost()},
         {"tags_elsewhere", r.memory.tag_disagreements > 0}};

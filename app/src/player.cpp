@@ -184,6 +184,7 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
   r.contacts = static_cast<int>(tracker.trace().contacts.size());
   r.constraints = tracker.trace().num_constraints;
   r.penetration = tracker.trace().penetration;
+  r.unexplained_torque = tracker.trace().unexplained_torque;
   r.visual_ms = -1.0;
   r.visual_used = 0;
   // Camera frames captured by this sample.

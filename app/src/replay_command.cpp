@@ -55,6 +55,7 @@ struct SetStats {
   int with_truth = 0;
   long constraints = 0;
   double penetration_sum = 0.0, penetration_max = 0.0, penetration_last = 0.0;  // [m]
+  double unexplained_sum = 0.0, unexplained_max = 0.0;                          // [N m]
   EstimateRecord last_with_truth;
 
   // One sample's record (`first`: the start, whose step time is not a step's).
@@ -65,6 +66,8 @@ struct SetStats {
     penetration_sum += r.penetration;
     penetration_max = std::max(penetration_max, r.penetration);
     penetration_last = r.penetration;
+    unexplained_sum += r.unexplained_torque;
+    unexplained_max = std::max(unexplained_max, r.unexplained_torque);
     if (std::isfinite(r.nees)) nees.push_back(r.nees);
     if (std::isfinite(r.position_error)) {
       sq_pos += r.position_error * r.position_error;
@@ -76,10 +79,10 @@ struct SetStats {
 };
 
 // estimates.csv's header: the pose, its sigma, the errors, the deepest link inside the estimate,
-// then one bias per joint.
+// the torque its contacts leave unexplained, then one bias per joint.
 void WriteEstimatesHeader(std::ostream& csv, const Session& session) {
   csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,"
-         "position_error_mm,orientation_error_deg,penetration_mm";
+         "position_error_mm,orientation_error_deg,penetration_mm,unexplained_torque_Nm";
   for (const std::string& n : session.joint_names()) csv << ",bias:" << n;
   csv << "\n";
 }
@@ -102,7 +105,7 @@ void WriteEstimate(std::ostream& csv, const std::string& session, const Modality
   csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
       << ","
       << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "")
-      << "," << FormatDouble(r.penetration * 1000);
+      << "," << FormatDouble(r.penetration * 1000) << "," << FormatDouble(r.unexplained_torque);
   for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
   csv << "\n";
 }

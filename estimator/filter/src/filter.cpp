@@ -37,6 +37,7 @@ void FilterTrace::Clear() {
   numeric_events = 0;
   slipping = false;
   penetration = 0.0;
+  unexplained_torque = 0.0;
 }
 
 Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams& params,

@@ -22,6 +22,11 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
   for (std::size_t i = 0; i < k; ++i)
     PointJacobian(hand_, kin_, pairs_[i].link, pairs_[i].c_f_P, Jc_[i]);
   EstimateContactForces(tau);
+  // (J_wᵀJ_w + μI) y = τ, so what the candidates leave of τ is μ y.
+  s_.trace.unexplained_torque = 0.0;
+  if (options_.use_torque && tau.allFinite())
+    s_.trace.unexplained_torque = torque_forces_ ? params_.torque_damping * y_.cwiseAbs().maxCoeff()
+                                                 : tau.cwiseAbs().maxCoeff();
   if (iteration == 0) s_.active.clear();
   for (std::size_t i = 0; i < k; ++i) {
     const ContactPair& pair = pairs_[i];

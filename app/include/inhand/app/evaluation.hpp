@@ -23,6 +23,7 @@ struct EstimateRecord {
       Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // [rad], R_gtᵀ R̂ = Exp(·)
   double step_time_us = 0.0;
   double penetration = 0.0;  // [m] FilterTrace::penetration: the deepest link inside the estimate
+  double unexplained_torque = 0.0;  // [N m] FilterTrace::unexplained_torque (sets with torques)
   int constraints = 0;
   int contacts = 0;
   int gated = 0;                    // measurement blocks rejected by a gate in this sample

@@ -64,6 +64,11 @@ struct FilterTrace {
   // query saw (before that query's update; 0: no link inside). A hand cannot be inside what it
   // holds: the estimate's own measure of impossibility, free (the step runs that query anyway).
   double penetration = 0.0;
+  // [N m] sets with torques: the largest joint torque that the contacts at the estimate (every
+  // candidate within reach, before the cone and force tests) cannot explain, |τ − Σ J_iᵀ λ̄_i|∞ at
+  // the step's last contact query; all of τ when no link is within reach. Fingers that press on an
+  // object the estimate has put elsewhere show here. 0 without torques.
+  double unexplained_torque = 0.0;
   void Clear();
 };
 
