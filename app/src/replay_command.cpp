@@ -126,7 +126,10 @@ Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& 
       // The deepest link inside the estimated object: over the samples, and at the end.
       {"penetration_mm_mean", n ? st.penetration_sum / n * 1000 : 0.0},
       {"penetration_mm_max", st.penetration_max * 1000},
-      {"terminal_penetration_mm", st.penetration_last * 1000}};
+      {"terminal_penetration_mm", st.penetration_last * 1000},
+      // The torques the contacts at the estimate leave unexplained (sets with torques).
+      {"unexplained_torque_Nm_mean", n ? st.unexplained_sum / n : 0.0},
+      {"unexplained_torque_Nm_max", st.unexplained_max}};
   s["images_fused"] = ts.images_fused;
   s["relocalizations"] = ts.relocalizations;
   s["images_features_lost"] = ts.images_features_lost;
