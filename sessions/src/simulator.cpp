@@ -90,7 +90,7 @@ class SimulationRun {
   SimulationSummary Execute();
 
  private:
-  void StepPhysics(double t);
+  Transform StepPhysics(double t);  // the palm pose T_WP after the step
   void StartRecording(const Transform& T_WP, const Transform& T_PO);
   void RecordJointSample(double t, const Transform& T_PO);
   void RecordCameraFrame(double t, const Transform& T_PW, const Transform& T_WO);
@@ -235,13 +235,13 @@ SimulationRun::SimulationRun(const SimulateOptions& opt, const sim::Scenario& sc
 SimulationSummary SimulationRun::Execute() {
   for (int k = 0; k <= steps_; ++k) {
     const double t = k * dt_;
-    StepPhysics(t);
-    const Transform T_PW = physics_->PalmPose().inverse();
+    const Transform T_WP = StepPhysics(t);
+    const Transform T_PW = T_WP.inverse();
     const Transform T_WO = physics_->ObjectPose();
     const Transform T_PO = T_PW * T_WO;
     if (t <= scenario_.close_start + kTimeTolerance) p_WO_close_ = T_WO.translation();
     const bool recording = t >= scenario_.record_start - kTimeTolerance;
-    if (recording && !writer_) StartRecording(physics_->PalmPose(), T_PO);
+    if (recording && !writer_) StartRecording(T_WP, T_PO);
     if (recording && k % joint_every_ == 0) RecordJointSample(t, T_PO);
     if (camera_sim_model_) {
       recent_.emplace_back(T_WL_, T_WO);
@@ -259,7 +259,7 @@ SimulationSummary SimulationRun::Execute() {
 
 // One physics step towards the script's targets; the links placed, the contact torques and their
 // estimate (as a real torque estimate would give them) updated.
-void SimulationRun::StepPhysics(double t) {
+Transform SimulationRun::StepPhysics(double t) {
   // Motor targets: the palm along its script, the joints within their torque limits.
   const auto targets = sim::TargetsAt(scenario_, t, &grip_);
   Eigen::VectorXd q_target(m_), tau_max(m_);
@@ -299,6 +299,7 @@ void SimulationRun::StepPhysics(double t) {
   }
   tau_estimate_ = torque_errors_.Step(dt_, tau_filtered_, (q_ - q_prev_) / dt_, tau_gravity_);
   q_prev_ = q_;
+  return T_WP;
 }
 
 void SimulationRun::StartRecording(const Transform& T_WP, const Transform& T_PO) {

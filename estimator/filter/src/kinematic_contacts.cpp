@@ -17,10 +17,10 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
   contacts_.Query(kin_.link_poses(), T_PO(), reach, pairs_);
   const std::size_t k = pairs_.size();
   s_.trace.penetration = 0.0;
-  for (const ContactPair& pair : pairs_)
-    s_.trace.penetration = std::max(s_.trace.penetration, -pair.distance);
-  for (std::size_t i = 0; i < k; ++i)
+  for (std::size_t i = 0; i < k; ++i) {
     PointJacobian(hand_, kin_, pairs_[i].link, pairs_[i].c_f_P, Jc_[i]);
+    s_.trace.penetration = std::max(s_.trace.penetration, -pairs_[i].distance);
+  }
   EstimateContactForces(tau);
   // (J_wᵀJ_w + μI) y = τ, so what the candidates leave of τ is μ y.
   s_.trace.unexplained_torque = 0.0;
