@@ -25,7 +25,7 @@ fi
 # files stay), the GUI, evaluations over many grasps or scans (Grasp.Allegro..., the YCB scans'
 # distance fields), and what only checks the installed tree or runs the benchmarks. Of the
 # replays and evaluations under ASan, the nine listed last took 614 of 1,530 test-seconds.
-END_TO_END='^(Cli|SessionPlayer|FrameComposer|Gui|Export|RoundTrip|Simulator|SimulatorPhysics|RealisticSimulation)\.'
+END_TO_END='^(Cli|SessionPlayer|FrameComposer|Gui|Export|RoundTrip|Simulator|SimulatorPhysics|RealisticSimulation|HealthFaults)\.'
 END_TO_END+='|^Robustness\.(OutputFolders|JointSamplesBeyond|AnAbsurdJointSample|TimeMisalignment|ASessionWithoutAFusable|StaleStaging|ParametersThatBreak)'
 END_TO_END+='|^Grasp\.AllegroStaticGraspsAroundYcbScans$|^ContactField\.YcbScansWithTheirVhacdPieces$'
 END_TO_END+='|^Import\.RealAllegroBagReplaysWithA3dVideo$|^bench_smoke$|^install'

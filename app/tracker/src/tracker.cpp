@@ -48,7 +48,9 @@ struct Tracker::Impl {
         params(p),
         options(opt),
         query(h, o),
-        filter(h, query, p.filter, tracker_detail::FilterOptionsFor(o, m)) {
+        filter(h, query, p.filter, tracker_detail::FilterOptionsFor(o, m)),
+        health(p.health),
+        press(h) {
     params.Validate();
     ValidateJointStiffness(h);
     deflect = m.torque && HasElasticJoints(h);
@@ -131,8 +133,29 @@ struct Tracker::Impl {
       s.after_sample = filter.state();
       s.fused.clear();
       ++stats.samples;
+      DrainEvidenceLocked();
     }
     last_t = t;
+    Judge(t, tau);
+  }
+
+  // The health at the sample just fused: the press check when due (sets with torques), then
+  // the state.
+  void Judge(double t, const Eigen::Ref<const Eigen::VectorXd>& tau) {
+    if (modalities.torque && t >= next_press_t - kTimeTolerance) {
+      health.OnPress(t, press.Measure(tau, filter.kinematics().link_poses(), filter.T_PO(),
+                                      filter.trace(), query, params.health));
+      next_press_t = t + params.health.press_period;
+    }
+    const auto P = filter.covariance();
+    health.OnSample(t, filter.trace(), P.diagonal().head<3>().cwiseSqrt(),
+                    P.diagonal().segment<3>(3).cwiseSqrt());
+  }
+
+  // Under the lock: what the images fused since the last call said, into the monitor.
+  void DrainEvidenceLocked() {
+    for (const ImageEvidence& e : evidence) health.OnImage(e);
+    evidence.clear();
   }
 
   void AddImage(double t_c, const Image8& image, const Transform& T_PC, const Intrinsics& K) {
@@ -146,6 +169,7 @@ struct Tracker::Impl {
       ++stats.images_rejected;
       return;
     }
+    health.OnImageAdded(t_c, ImageFingerprint(image.data.data(), image.data.size()));
     if (!started || t_c > last_t + kTimeTolerance) {
       if (t_c + kTimeTolerance < start_t) return DropLate();
       // Waits for the samples up to its capture time, in capture order.
@@ -156,7 +180,13 @@ struct Tracker::Impl {
       return;
     }
     if (BeyondHorizon(t_c)) return DropLate();
-    if (!options.threaded) return Process(t_c, image, T_PC, K);  // no copy of the image
+    if (!options.threaded) {
+      Process(t_c, image, T_PC, K);  // no copy of the image
+      std::lock_guard<std::mutex> lock(mutex);
+      DrainEvidenceLocked();
+      health.Decide(last_t);
+      return;
+    }
     Submit(Job{t_c, image, T_PC, K});
   }
 
@@ -286,6 +316,14 @@ struct Tracker::Impl {
       stats.last_relocalized = step.relocalized;
     }
     if (replayed > 0) ++stats.rewinds, stats.samples_replayed += replayed;
+    ImageEvidence e;
+    e.t_capture = t_c;
+    e.offered = step.offered;
+    e.used = step.used;
+    e.features_lost = after.features_lost();
+    e.tags_elsewhere = after.tag_disagreements > 0;
+    e.relocalized = step.relocalized;
+    evidence.push_back(e);
     step.sequence = ++sequence;
     if (options.threaded) {
       adopt_state = fusion->filter().state();
@@ -306,7 +344,10 @@ struct Tracker::Impl {
   BulletContactQuery query;
   Filter filter;  // the caller's
   VisualStep last_visual;
-  VisualMemory memory;  // after last_visual
+  VisualMemory memory;   // after last_visual
+  HealthMonitor health;  // the caller's
+  PressCheck press;
+  double next_press_t = 0.0;
 
   bool start_set = false, started = false;
   double start_t = 0.0, last_t = 0.0;
@@ -328,6 +369,7 @@ struct Tracker::Impl {
   FilterState adopt_state;
   VisualStep adopt_visual;
   VisualMemory adopt_memory;
+  std::vector<ImageEvidence> evidence;  // images published, not yet judged by the caller
   std::exception_ptr worker_error;
   std::condition_variable work_cv, idle_cv;
   std::thread worker;
@@ -357,6 +399,9 @@ void Tracker::Start(double t, const Transform& T_PO, const StartSigmas& sigmas) 
   m.adopt_pending = false;
   m.last_visual = VisualStep();
   m.RecallLocked(VisualMemory(), 0);
+  m.evidence.clear();
+  m.health.Reset(t);
+  m.next_press_t = t;
 }
 
 void Tracker::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -387,6 +432,9 @@ VisualMemory Tracker::visual_memory() const {
 const Modalities& Tracker::modalities() const { return impl_->modalities; }
 const TrackerParams& Tracker::params() const { return impl_->params; }
 
+const Health& Tracker::health() const { return impl_->health.health(); }
+const PressEvidence& Tracker::press_evidence() const { return impl_->health.press(); }
+
 TrackerStats Tracker::stats() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->stats;
@@ -408,6 +456,8 @@ TrackerSnapshot Tracker::Save() const {
   s.visual = m.last_visual;
   s.memory = m.memory;
   s.stats = m.stats;
+  s.health = m.health;
+  s.next_press_t = m.next_press_t;
   if (m.history.last() >= m.history.first()) s.last = m.history.At(m.history.last());
   return s;
 }
@@ -423,6 +473,9 @@ void Tracker::Restore(const TrackerSnapshot& s) {
   m.started = s.started;
   m.last_t = s.t;
   m.stats = s.stats;
+  m.health = s.health;
+  m.next_press_t = s.next_press_t;
+  m.evidence.clear();
   m.last_visual = s.visual;
   m.RecallLocked(s.memory, s.visual.sequence);
   m.history.Clear();

@@ -61,6 +61,28 @@ const std::vector<param_table::Field<FeatureParams>>& FeatureFields() {
   return fields;
 }
 
+const std::vector<param_table::Field<HealthParams>>& HealthFields() {
+  using H = HealthParams;
+  static const std::vector<param_table::Field<H>> fields = {
+      Number("uncertain_position", &H::uncertain_position),
+      Number("uncertain_orientation", &H::uncertain_orientation),
+      Number("penetration", &H::penetration),
+      Number("press_torque", &H::press_torque),
+      Number("press_gap", &H::press_gap),
+      Number("press_reach", &H::press_reach),
+      Number("press_period", &H::press_period),
+      Number("sustain", &H::sustain),
+      Integer("vision_window", &H::vision_window),
+      Integer("vision_min_offered", &H::vision_min_offered),
+      Number("vision_gated_share", &H::vision_gated_share),
+      Number("images_stale", &H::images_stale),
+      Integer("images_frozen", &H::images_frozen),
+      Number("relocalized_hold", &H::relocalized_hold),
+      Number("slip_hold", &H::slip_hold),
+      Number("lost_after", &H::lost_after)};
+  return fields;
+}
+
 // The structs' own Validate() messages, prefixed with the file.
 template <typename F>
 void Prefixed(const std::string& source, F&& validate) {
@@ -83,6 +105,7 @@ void TrackerParams::Validate(const std::string& source) const {
                      std::to_string(tag_relocate_images) + ", expected in [0, 1000] (0: never)");
   Prefixed(source, [&] { tags.Validate(); });
   Prefixed(source, [&] { features.Validate(); });
+  health.Validate(source);
 }
 
 std::string TrackerParamsToJson(const TrackerParams& params) {
@@ -93,6 +116,7 @@ std::string TrackerParamsToJson(const TrackerParams& params) {
   tags["relocate_images"] = params.tag_relocate_images;
   j["tags"] = tags;
   j["features"] = Write(params.features, FeatureFields());
+  j["health"] = Write(params.health, HealthFields());
   j["joints"] = {{"limit_margin", params.joint_limit_margin},
                  {"clamp_to_limits", params.joint_clamp_to_limits}};
   return j.dump(2);
@@ -131,6 +155,10 @@ TrackerParams TrackerParamsFromJson(const std::string& json_text, const std::str
   if (j.contains("features")) {
     Read(j["features"], FeatureFields(), source + " (features)", p.features);
     j.erase("features");
+  }
+  if (j.contains("health")) {
+    Read(j["health"], HealthFields(), source + " (health)", p.health);
+    j.erase("health");
   }
   if (j.contains("joints")) {
     const Json& joints = j["joints"];

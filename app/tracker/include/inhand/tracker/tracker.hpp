@@ -32,6 +32,7 @@
 #include "inhand/features/extracted.hpp"
 #include "inhand/features/tags.hpp"
 #include "inhand/filter/filter.hpp"
+#include "inhand/filter/health.hpp"
 #include "inhand/renderer/renderer.hpp"
 #include "inhand/tracker/tracker_params.hpp"
 
@@ -164,6 +165,8 @@ struct TrackerSnapshot {
   VisualStep visual;
   VisualMemory memory;  // after its visual updates
   TrackerStats stats;
+  HealthMonitor health;
+  double next_press_t = 0.0;
 };
 
 class Tracker {
@@ -204,6 +207,12 @@ class Tracker {
   const VisualStep& last_visual() const;
   VisualMemory visual_memory() const;  // after last_visual()
   TrackerStats stats() const;
+  // The estimate's health at the newest joint sample, from what the hand and the camera said up
+  // to it (filter/health.hpp); HealthMessage(tracker.health(), hand) says it in words. Sets with
+  // torques check every HealthParams::press_period that the fingers the torques say press are near
+  // the estimated object; press_evidence() is that check's last finding.
+  const Health& health() const;
+  const PressEvidence& press_evidence() const;
   const Modalities& modalities() const;
   const TrackerParams& params() const;
 

@@ -1,13 +1,15 @@
 #pragma once
 // Everything a Tracker is configured with, in one struct and one JSON file (`--params`): the
 // filter's parameters at the top level (as the files written before the tracker existed), the
-// tag detector's under "tags", the extracted features' under "features". Unknown fields are
+// tag detector's under "tags", the extracted features' under "features", the health monitor's
+// under "health". Unknown fields are
 // errors that name the file and the field; every value is validated.
 #include <string>
 
 #include "inhand/core/hand_model.hpp"
 #include "inhand/features/extracted.hpp"
 #include "inhand/features/tags.hpp"
+#include "inhand/filter/health.hpp"
 #include "inhand/filter/joint_samples.hpp"  // ScreenJointSample, ClampToLimits (joints.*)
 #include "inhand/filter/params.hpp"
 
@@ -36,6 +38,9 @@ struct TrackerParams {
   // overshoot). JSON: "joints": {"clamp_to_limits"}. The player reports them either way, once per
   // joint (SessionPlayer::InputReport).
   bool joint_clamp_to_limits = false;
+  // When the estimate calls itself uncertain, inconsistent or lost (filter/health.hpp). JSON:
+  // "health": {...}, the fields' names.
+  HealthParams health;
 
   // Throws InputError("SOURCE: parameter '...' is ..., expected ...").
   void Validate(const std::string& source = "tracker parameters") const;
