@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -49,6 +50,13 @@ std::string HudLine(const std::string& name, const PictureState::Set& set) {
     line << ", object not matched in " << r.memory.features_poor_frames << " frames";
   if (r.memory.tag_disagreements > 0) line << ", tags see it elsewhere";
   if (r.slipping) line << ", grip loosened";
+  if (!set.health.empty()) {
+    std::string h = set.health;
+    if (r.health.state >= HealthState::kInconsistent)
+      for (std::size_t i = 0; i < h.size() && h[i] != ' '; ++i)
+        h[i] = static_cast<char>(std::toupper(h[i]));
+    line << " -- " << h;
+  }
   return line.str();
 }
 
@@ -78,6 +86,8 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
     if (stats.relocalizations > 0 && stats.last_relocalization_t <= t &&
         t - stats.last_relocalization_t <= 1.0)
       set.found_again = stats.last_relocalized;
+    if (set.record.health.state != HealthState::kOk)
+      set.health = HealthMessage(set.record.health, p.models().hand);
     st.sets.push_back(std::move(set));
   }
   const std::size_t last = p.sets().size() - 1;

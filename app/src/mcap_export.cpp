@@ -162,7 +162,14 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
         {"unexplained_torque_Nm", r.unexplained_torque},
         {"slipping", r.slipping},
         {"features_lost", r.memory.features_lost()},
-        {"tags_elsewhere", r.memory.tag_disagreements > 0}};
+        {"tags_elsewhere", r.memory.tag_disagreements > 0},
+        {"health", HealthStateName(r.health.state)},
+        {"health_cause", HealthCauseName(r.health.cause)},
+        {"health_value", r.health.value},
+        {"health_since", r.health.since}};
+    if (r.health.state != HealthState::kOk)
+      e["health_message"] = HealthMessage(r.health, p_.models().hand);
+    if (r.press.pressing) e["pressing_gap_mm"] = r.press.gap * 1000;
     if (std::isfinite(r.position_error)) {
       e["position_error_mm"] = r.position_error * 1000;
       e["orientation_error_deg"] = r.orientation_error * 180 / M_PI;

@@ -209,6 +209,8 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
   r.gated = tracker.trace().num_gated;  // contacts and visual features of this sample
   r.slipping = tracker.trace().slipping;
   r.memory = tracker.visual_memory();
+  r.health = tracker.health();
+  r.press = tracker.press_evidence();
   if (TruthCovers(t))
     CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
   else

@@ -1,6 +1,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -12,6 +13,7 @@
 #include <functional>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -56,6 +58,12 @@ struct SetStats {
   long constraints = 0;
   double penetration_sum = 0.0, penetration_max = 0.0, penetration_last = 0.0;  // [m]
   double unexplained_sum = 0.0, unexplained_max = 0.0;                          // [N m]
+  std::array<double, 4> health_time{};       // [s] per HealthState
+  std::map<std::string, double> cause_time;  // [s] per HealthCause, states other than ok
+  double first_alarm_t = -1.0;               // [s] the first sample inconsistent or lost
+  int alarms = 0;                            // times the state became inconsistent or lost
+  double last_t = 0.0;
+  Health last_health;
   EstimateRecord last_with_truth;
 
   // One sample's record (`first`: the start, whose step time is not a step's).
@@ -68,6 +76,16 @@ struct SetStats {
     penetration_last = r.penetration;
     unexplained_sum += r.unexplained_torque;
     unexplained_max = std::max(unexplained_max, r.unexplained_torque);
+    const double dt = first ? 0.0 : r.t - last_t;
+    last_t = r.t;
+    health_time[static_cast<std::size_t>(r.health.state)] += dt;
+    if (r.health.state != HealthState::kOk) cause_time[HealthCauseName(r.health.cause)] += dt;
+    const bool alarm = r.health.state >= HealthState::kInconsistent;
+    if (alarm && (first || last_health.state < HealthState::kInconsistent)) {
+      ++alarms;
+      if (first_alarm_t < 0.0) first_alarm_t = r.t;
+    }
+    last_health = r.health;
     if (std::isfinite(r.nees)) nees.push_back(r.nees);
     if (std::isfinite(r.position_error)) {
       sq_pos += r.position_error * r.position_error;
@@ -79,10 +97,13 @@ struct SetStats {
 };
 
 // estimates.csv's header: the pose, its sigma, the errors, the deepest link inside the estimate,
-// the torque its contacts leave unexplained, then one bias per joint.
+// the torque its contacts leave unexplained, its health and why, how far the object is from the
+// pressing finger most in the air (sets with torques, when a finger presses), then one bias per
+// joint.
 void WriteEstimatesHeader(std::ostream& csv, const Session& session) {
   csv << "t,set,px,py,pz,qw,qx,qy,qz,sigma_px,sigma_py,sigma_pz,sigma_rx,sigma_ry,sigma_rz,"
-         "position_error_mm,orientation_error_deg,penetration_mm,unexplained_torque_Nm";
+         "position_error_mm,orientation_error_deg,penetration_mm,unexplained_torque_Nm,health,"
+         "health_cause,pressing_gap_mm";
   for (const std::string& n : session.joint_names()) csv << ",bias:" << n;
   csv << "\n";
 }
@@ -105,7 +126,9 @@ void WriteEstimate(std::ostream& csv, const std::string& session, const Modality
   csv << "," << (std::isfinite(r.position_error) ? FormatDouble(r.position_error * 1000) : "")
       << ","
       << (std::isfinite(r.orientation_error) ? FormatDouble(r.orientation_error * 180 / M_PI) : "")
-      << "," << FormatDouble(r.penetration * 1000) << "," << FormatDouble(r.unexplained_torque);
+      << "," << FormatDouble(r.penetration * 1000) << "," << FormatDouble(r.unexplained_torque)
+      << "," << HealthStateName(r.health.state) << "," << HealthCauseName(r.health.cause) << ","
+      << (r.press.pressing ? FormatDouble(r.press.gap * 1000) : "");
   for (long j = 0; j < r.biases.size(); ++j) csv << "," << FormatDouble(r.biases[j]);
   csv << "\n";
 }
@@ -130,6 +153,26 @@ Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& 
       // The torques the contacts at the estimate leave unexplained (sets with torques).
       {"unexplained_torque_Nm_mean", n ? st.unexplained_sum / n : 0.0},
       {"unexplained_torque_Nm_max", st.unexplained_max}};
+  // Its health (filter/health.hpp): the share of the time in each state, the time spent in each
+  // cause, the alarms (becoming inconsistent or lost) and the first one's time, the last state.
+  {
+    const double total =
+        st.health_time[0] + st.health_time[1] + st.health_time[2] + st.health_time[3];
+    // Sums of sample intervals: to the microsecond, without the sums' rounding noise.
+    const auto micro = [](double v) { return std::round(v * 1e6) / 1e6; };
+    Json share = Json::object();
+    for (int k = 0; k < 4; ++k)
+      share[HealthStateName(static_cast<HealthState>(k))] = micro(
+          total > 0 ? st.health_time[static_cast<std::size_t>(k)] / total : (k == 0 ? 1.0 : 0.0));
+    s["health_time_share"] = share;
+    Json causes = Json::object();
+    for (const auto& [cause, seconds] : st.cause_time) causes[cause] = micro(seconds);
+    s["health_cause_seconds"] = causes;
+    s["health_alarms"] = st.alarms;
+    s["health_first_alarm_t"] = st.first_alarm_t >= 0.0 ? Json(st.first_alarm_t) : Json(nullptr);
+    s["health_final"] = HealthStateName(st.last_health.state);
+    s["health_final_cause"] = HealthCauseName(st.last_health.cause);
+  }
   s["images_fused"] = ts.images_fused;
   s["relocalizations"] = ts.relocalizations;
   s["images_features_lost"] = ts.images_features_lost;

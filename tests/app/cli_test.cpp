@@ -267,7 +267,30 @@ TEST(Cli, ReplayEndToEnd) {
     EXPECT_LT(m.at("terminal_position_error_mm").get<double>(), 100.0) << set;
     EXPECT_LT(m.at("terminal_orientation_error_deg").get<double>(), 45.0) << set;
     EXPECT_GT(m.at("step_time_us_median").get<double>(), 0.0);
+    // Health: the shares of the states make the whole run; a noise-free session raises no alarm.
+    double total = 0.0;
+    for (const char* state : {"ok", "uncertain", "inconsistent", "lost"}) {
+      const double share = m.at("health_time_share").at(state).get<double>();
+      EXPECT_GE(share, 0.0);
+      total += share;
+    }
+    EXPECT_NEAR(total, 1.0, 4e-6) << set;
+    EXPECT_EQ(m.at("health_alarms").get<int>(), 0) << set;
+    EXPECT_TRUE(m.at("health_first_alarm_t").is_null()) << set;
   }
+  // estimates.csv: every row states its health and cause by name.
+  std::ifstream csv(dir / "replay/estimates.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  EXPECT_NE(header.find(",health,health_cause,pressing_gap_mm,"), std::string::npos) << header;
+  int rows = 0;
+  while (std::getline(csv, row)) {
+    const bool named =
+        row.find(",ok,") != std::string::npos || row.find(",uncertain,") != std::string::npos;
+    EXPECT_TRUE(named) << row;
+    if (!named || ++rows > 5000) break;
+  }
+  EXPECT_GT(rows, 100);
   const VideoInfo v = ProbeVideo(dir / "replay/replay.mp4");
   EXPECT_EQ(v.frames, s.at("camera_frames").get<int>());
   EXPECT_EQ(v.height, 480);

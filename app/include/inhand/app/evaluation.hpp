@@ -36,6 +36,8 @@ struct EstimateRecord {
   // slipping); the extracted features are lost, the tags see the object elsewhere (VisualMemory).
   bool slipping = false;
   VisualMemory memory;
+  Health health;        // Tracker::health() after this sample and its images
+  PressEvidence press;  // Tracker::press_evidence(): the pressing finger most in the air
 };
 
 // Fills the errors against the true pose and the NEES of the pose against its covariance P

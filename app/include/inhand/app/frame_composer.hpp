@@ -23,6 +23,7 @@ struct PictureState {
     std::vector<FilterTrace::Visual> visual;
     double found_again = 0.0;  // [m] an image of the last second found the lost object this far
                                // from the estimate (TrackerStats::last_relocalized)
+    std::string health;        // HealthMessage of record.health, empty when ok
   };
   std::vector<Set> sets;
   std::vector<Transform> link_poses;  // the hand as the last set believes it (biased joints)
@@ -34,7 +35,8 @@ struct PictureState {
 // A set's HUD line: its name, the error against the truth (when there is one), the largest
 // principal σ of its position and of its orientation (what the set claims: on a recording without
 // ground truth, the only measure of how far to trust it), its constraints and what the tracker
-// says beside the numbers (found again, not matched, tags elsewhere, grip loosened).
+// says beside the numbers (found again, not matched, tags elsewhere, grip loosened), then its
+// health when not ok, in capitals when inconsistent or lost.
 std::string HudLine(const std::string& name, const PictureState::Set& set);
 // √ of the largest eigenvalue of a covariance block.
 double LargestSigma(const Mat3& covariance);
