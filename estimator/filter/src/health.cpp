@@ -119,6 +119,13 @@ void HealthParams::Validate(const std::string& source) const {
   positive(images_stale, "images_stale", 1e4);
   positive(lost_after, "lost_after", 1e4);
   positive(vision_gated_share, "vision_gated_share", 1.0);
+  positive(recover_reach, "recover_reach", 1.0);
+  if (!(recover_gap >= press_gap && recover_gap < recover_reach))
+    throw InputError(source + ": parameter 'health.recover_gap' is " + std::to_string(recover_gap) +
+                     ", expected >= 'health.press_gap' and < 'health.recover_reach'");
+  if (recover_images < 0 || recover_images > 1000)
+    throw InputError(source + ": parameter 'health.recover_images' is " +
+                     std::to_string(recover_images) + ", expected in [0, 1000]");
   if (!(press_reach >= press_gap))
     throw InputError(source + ": parameter 'health.press_reach' must be >= 'health.press_gap'");
   for (const auto& [v, name] : {std::pair{sustain, "sustain"},
@@ -135,32 +142,11 @@ void HealthParams::Validate(const std::string& source) const {
 
 // --- the press check
 
-PressCheck::PressCheck(const HandModel& hand) {
+PressCheck::PressCheck(const HandModel& hand) : fingers_(hand) {
   const std::size_t links = hand.links.size();
-  link_finger_.assign(links, -1);
-  std::vector<int> joint_q(hand.joints.size(), -1);
-  for (int i = 0; i < hand.num_q(); ++i) joint_q[static_cast<std::size_t>(hand.q_joints[i])] = i;
-  std::vector<int> first_joints;
-  for (std::size_t l = 0; l < links && l < hand.support.size(); ++l) {
-    const std::vector<int>& chain = hand.support[l];
-    if (chain.empty()) continue;
-    auto it = std::find(first_joints.begin(), first_joints.end(), chain.front());
-    if (it == first_joints.end()) {
-      first_joints.push_back(chain.front());
-      finger_q_.emplace_back();
-      it = first_joints.end() - 1;
-    }
-    const int f = static_cast<int>(it - first_joints.begin());
-    link_finger_[l] = f;
-    for (int j : chain) {
-      const int qi = joint_q[static_cast<std::size_t>(j)];
-      std::vector<int>& qs = finger_q_[static_cast<std::size_t>(f)];
-      if (qi >= 0 && std::find(qs.begin(), qs.end(), qi) == qs.end()) qs.push_back(qi);
-    }
-  }
-  torque_.assign(finger_q_.size(), 0.0);
-  gap_.assign(finger_q_.size(), 0.0);
-  nearest_.assign(finger_q_.size(), -1);
+  torque_.assign(fingers_.finger_q.size(), 0.0);
+  gap_.assign(fingers_.finger_q.size(), 0.0);
+  nearest_.assign(fingers_.finger_q.size(), -1);
   pairs_.reserve(2 * links + 8);
 }
 
@@ -171,9 +157,8 @@ PressEvidence PressCheck::Measure(const Eigen::Ref<const Eigen::VectorXd>& tau,
   PressEvidence out;
   if (!tau.allFinite()) return out;
   bool any = false, query_needed = false;
-  for (std::size_t f = 0; f < finger_q_.size(); ++f) {
-    double t = 0.0;
-    for (int qi : finger_q_[f]) t = std::max(t, std::abs(tau[qi]));
+  for (std::size_t f = 0; f < fingers_.finger_q.size(); ++f) {
+    const double t = fingers_.Torque(static_cast<int>(f), tau);
     torque_[f] = t;
     gap_[f] = params.press_reach;
     nearest_[f] = -1;
@@ -183,23 +168,23 @@ PressEvidence PressCheck::Measure(const Eigen::Ref<const Eigen::VectorXd>& tau,
   // The step's own contacts first: a pressing finger with a link within its reach is close.
   for (const FilterTrace::Contact& c : trace.contacts) {
     if (c.iteration != 0 || c.link < 0) continue;
-    const int f = link_finger_[static_cast<std::size_t>(c.link)];
+    const int f = fingers_.link_finger[static_cast<std::size_t>(c.link)];
     if (f >= 0 && c.distance < gap_[static_cast<std::size_t>(f)])
       gap_[static_cast<std::size_t>(f)] = c.distance,
       nearest_[static_cast<std::size_t>(f)] = c.link;
   }
-  for (std::size_t f = 0; f < finger_q_.size(); ++f)
+  for (std::size_t f = 0; f < fingers_.finger_q.size(); ++f)
     query_needed = query_needed || (torque_[f] >= params.press_torque && nearest_[f] < 0);
   if (query_needed) {
     query.Query(T_PL, T_PO, params.press_reach, pairs_);
     for (const ContactPair& p : pairs_) {
-      const int f = link_finger_[static_cast<std::size_t>(p.link)];
+      const int f = fingers_.link_finger[static_cast<std::size_t>(p.link)];
       if (f >= 0 && p.distance < gap_[static_cast<std::size_t>(f)])
         gap_[static_cast<std::size_t>(f)] = p.distance,
         nearest_[static_cast<std::size_t>(f)] = p.link;
     }
   }
-  for (std::size_t f = 0; f < finger_q_.size(); ++f) {
+  for (std::size_t f = 0; f < fingers_.finger_q.size(); ++f) {
     if (torque_[f] < params.press_torque) continue;
     if (!out.pressing || gap_[f] > out.gap) {
       out.pressing = true;

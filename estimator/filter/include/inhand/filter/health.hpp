@@ -17,6 +17,7 @@
 
 #include "inhand/core/contact.hpp"
 #include "inhand/core/hand_model.hpp"
+#include "inhand/filter/plausibility.hpp"
 
 namespace inhand {
 
@@ -83,6 +84,13 @@ struct HealthParams {
   double slip_hold = 0.25;              // [s] uncertain after the grip last loosened (it
                                         // loosens and firms from one sample to the next)
   double lost_after = 1.0;              // [s] inconsistent this long: lost
+  // Recovery (sets with torques and extracted features; docs/estimator.md, "Plausibility and
+  // recovery"): after recover_images images in a row that found a pressing finger more than
+  // recover_gap from the estimated object, the object is searched for among poses that explain
+  // the hand (0 images: never).
+  int recover_images = 2;
+  double recover_gap = 0.02;    // [m] (a finger 10 mm off under joint offsets is not lost)
+  double recover_reach = 0.15;  // [m] how far from the object the recovery looks for fingers
   void Validate(const std::string& source = "health parameters") const;
 };
 
@@ -105,8 +113,8 @@ struct PressEvidence {
   double torque = 0.0;    // [N m] its largest joint torque
 };
 
-// Which links and joints make up each finger of a hand (the links whose chains start at the
-// same joint), and the press check over them. Allocates nothing per check once warmed up.
+// The press check over a hand's fingers (HandFingers). Allocates nothing per check once warmed
+// up.
 class PressCheck {
  public:
   explicit PressCheck(const HandModel& hand);
@@ -116,13 +124,12 @@ class PressCheck {
   PressEvidence Measure(const Eigen::Ref<const Eigen::VectorXd>& tau,
                         const std::vector<Transform>& T_PL, const Transform& T_PO,
                         const FilterTrace& trace, ContactQuery& query, const HealthParams& params);
-  int num_fingers() const { return static_cast<int>(finger_q_.size()); }
+  int num_fingers() const { return fingers_.size(); }
 
  private:
-  std::vector<int> link_finger_;            // per link: its finger, -1 for none (the palm)
-  std::vector<std::vector<int>> finger_q_;  // per finger: its configuration entries
-  std::vector<double> torque_, gap_;        // per finger, this check
-  std::vector<int> nearest_;                // per finger: its nearest link
+  HandFingers fingers_;
+  std::vector<double> torque_, gap_;  // per finger, this check
+  std::vector<int> nearest_;          // per finger: its nearest link
   std::vector<ContactPair> pairs_;
 };
 
