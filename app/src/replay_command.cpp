@@ -175,6 +175,8 @@ Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& 
   }
   s["images_fused"] = ts.images_fused;
   s["relocalizations"] = ts.relocalizations;
+  s["recoveries"] = ts.recoveries;
+  s["shifts_refused"] = ts.shifts_refused;
   s["images_features_lost"] = ts.images_features_lost;
   s["images_tags_elsewhere"] = ts.images_tags_elsewhere;
   s["images_dropped"] = ts.images_dropped_late + ts.images_dropped_busy + ts.images_rejected;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
@@ -10,19 +12,25 @@
 namespace inhand::tracker_detail {
 
 ExtractedFeatures::ExtractedFeatures(const HandModel& hand, const ObjectModel& object,
-                                     const FeatureParams& params)
+                                     const TrackerParams& params, bool torque)
     : hand_(hand),
       object_(object),
-      params_(params),
+      params_(params.features),
+      health_(params.health),
       centre_O_(object.Bounds().Center()),
       radius_(0.5 * object.Bounds().Size().norm()) {
   params_.Validate();
+  if (torque) {
+    query_ = std::make_unique<BulletContactQuery>(hand, object);
+    plausibility_ = std::make_unique<HandPlausibility>(hand, *query_);
+  }
 }
 
 ExtractedFeatures::~ExtractedFeatures() = default;
 
 void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
-                                const Filter& f, VisualStep& step, VisualUpdate& update) {
+                                const Eigen::VectorXd& tau, const Filter& f, VisualStep& step,
+                                VisualUpdate& update) {
   std::vector<VisualFeature>& out = update.features;
   if (!renderer_) {
     renderer_ = std::make_unique<Renderer>();
@@ -31,17 +39,26 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
         UploadObject(*renderer_, object_, PrintedTagMeshes(object_));  // its appearance
   }
   step.has_features = true;
-  // The virtual image: the scene as this filter believes it (hand at its biased joints).
-  renderer_->Render(CameraScene(hand_meshes_, f.kinematics().link_poses(), object_meshes_, f.T_PO(),
-                                T_PC, K, Vec3(0.5, 0.5, 0.5)),
-                    step.virtual_view, true);
-  const std::vector<std::uint16_t>& label = step.virtual_view.label;
-  object_mask_.resize(label.size());
-  hand_mask_.resize(label.size());
-  for (std::size_t i = 0; i < label.size(); ++i) {
-    object_mask_[i] = label[i] == kObjectLabel;
-    hand_mask_[i] = label[i] >= kHandLabelBase && label[i] < kExtraLabelBase;
+  // Does the estimate explain the hand? A finger that the torques say presses, recover_gap or
+  // more in the air for recover_images images in a row, starts the recovery; every whole-object
+  // shift below is scored against the same.
+  const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);  // the object's centre, camera frame
+  Plausibility now;
+  const bool hand_check =
+      plausibility_ && tau.size() == hand_.num_q() && tau.allFinite() && X_C.z() > 1e-3;
+  if (hand_check) {
+    now = plausibility_->Score(tau, f.kinematics().link_poses(), f.T_PO(), health_,
+                               health_.press_reach);
+    const bool in_air = now.pressing > 0 && now.pressing_gap > health_.recover_gap;
+    implausible_images_ = in_air ? implausible_images_ + 1 : 0;
+    if (health_.recover_images > 0 && implausible_images_ >= health_.recover_images &&
+        Recover(image, T_PC, K, tau, f, step, update)) {
+      implausible_images_ = 0;
+      return;
+    }
   }
+  // The virtual image: the scene as this filter believes it (hand at its biased joints).
+  RenderAt(f, f.T_PO(), T_PC, K, step.virtual_view);
   // Search as far as the estimate is uncertain: 3σ of the pixel of the object's centre (its
   // position, and its orientation at the object's radius), within [search_radius,
   // max_search_radius], and that far until a frame has matched well. That first match must bridge
@@ -52,7 +69,6 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   // ketchup bottle that slipped 18 deg was otherwise matched to clutter and ended 26 mm off.
   FeatureParams p = params_;
   int radius = params_.max_search_radius;
-  const Vec3 X_C = T_PC.inverse() * (f.T_PO() * centre_O_);  // the object's centre, camera frame
   if (matched_well_) {
     radius = params_.search_radius;
     const auto P = f.covariance();
@@ -79,6 +95,18 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   step.relocalized = 0.0;
   step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_,
                              false);  // no debug-only camera corners
+  // A whole-object shift that walks the estimate off the fingers pressing on the object
+  // (AdmitsShift) is refused: the corners are searched locally.
+  if (hand_check && p.global_search_radius > 0 &&
+      !AdmitsShift(tau, f, Shifted(f.T_PO(), step.match.debug.global_shift, X_C.z(), T_PC, K),
+                   now)) {
+    ++step.shifts_refused;
+    p.global_search_radius = 0;
+    p.search_radius = params_.search_radius;
+    step.search_radius = params_.search_radius;
+    step.match =
+        MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false);
+  }
   Inliers(step.match, T_PC, K, f, step.virtual_view, step.used_match, out);
   const bool well = static_cast<int>(out.size()) >= kWellMatched;
 
@@ -98,7 +126,11 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     MatchResult again =
         MatchFeatures(image, step.virtual_view.colour, &object_mask_, global, &hand_mask_, false);
     const MatchDebug& d = again.debug;
-    if (d.global_cost < 0.5 * d.global_cost_unshifted && X_C.z() > 1e-3) {
+    const bool admitted =
+        !hand_check ||
+        AdmitsShift(tau, f, Shifted(f.T_PO(), d.global_shift, X_C.z(), T_PC, K), now);
+    step.shifts_refused += !admitted;
+    if (d.global_cost < 0.5 * d.global_cost_unshifted && X_C.z() > 1e-3 && admitted) {
       std::vector<int> used;
       std::vector<VisualFeature> found;
       Inliers(again, T_PC, K, f, step.virtual_view, used, found);
@@ -118,6 +150,7 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
 
 void ExtractedFeatures::Fused(const Filter& f, const VisualUpdate& update, int used,
                               VisualStep& step) {
+  if (update.relocate) return;  // recovered: nothing matched or fused in this image
   poor_frames_ = used >= kWellMatched ? 0 : poor_frames_ + 1;
   Residuals(f, update, step.residual_after);
 }
@@ -125,11 +158,13 @@ void ExtractedFeatures::Fused(const Filter& f, const VisualUpdate& update, int u
 void ExtractedFeatures::Remember(VisualMemory& memory) const {
   memory.features_matched_well = matched_well_;
   memory.features_poor_frames = poor_frames_;
+  memory.implausible_images = implausible_images_;
 }
 
 void ExtractedFeatures::Recall(const VisualMemory& memory) {
   matched_well_ = memory.features_matched_well;
   poor_frames_ = memory.features_poor_frames;
+  implausible_images_ = memory.implausible_images;
 }
 
 void ExtractedFeatures::Residuals(const Filter& f, const VisualUpdate& update,
@@ -174,6 +209,123 @@ void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC,
     out.push_back(feature);
     used.push_back(static_cast<int>(m));
   }
+}
+
+void ExtractedFeatures::RenderAt(const Filter& f, const Transform& T_PO, const Transform& T_PC,
+                                 const Intrinsics& K, RenderOutput& view) {
+  renderer_->Render(CameraScene(hand_meshes_, f.kinematics().link_poses(), object_meshes_, T_PO,
+                                T_PC, K, Vec3(0.5, 0.5, 0.5)),
+                    view, true);
+  const std::vector<std::uint16_t>& label = view.label;
+  object_mask_.resize(label.size());
+  hand_mask_.resize(label.size());
+  for (std::size_t i = 0; i < label.size(); ++i) {
+    object_mask_[i] = label[i] == kObjectLabel;
+    hand_mask_[i] = label[i] >= kHandLabelBase && label[i] < kExtraLabelBase;
+  }
+}
+
+// A shift of the object's image by s px at depth z is a move of z s / f in the image plane.
+Transform ExtractedFeatures::Shifted(const Transform& T_PO, const Vec2& shift, double depth,
+                                     const Transform& T_PC, const Intrinsics& K) {
+  Transform T = T_PO;
+  T.translation() += T_PC.linear() * Vec3(shift.x() * depth / K.fx, shift.y() * depth / K.fy, 0.0);
+  return T;
+}
+
+// Only the pressing fingers judge a shift: it is in the image plane at the estimate's depth,
+// and the depth the camera cannot see is left to the features that follow, so a shift can put
+// links deep inside the object and still be right (a hard water bottle's shifts of 75 mm put the
+// palm 25-30 mm inside the bottle and ended 8 mm off; refused, a brush ended turned 23 deg). An
+// estimate that has the pressing fingers on the object (within press_gap) may not be shifted to
+// where one of them is more than recover_gap away: it would walk off the fingers that hold the
+// object. An estimate already off them is the recovery's business.
+bool ExtractedFeatures::AdmitsShift(const Eigen::VectorXd& tau, const Filter& f,
+                                    const Transform& T_PO, const Plausibility& now) {
+  if (now.pressing == 0 || now.pressing_gap > health_.press_gap) return true;
+  const Plausibility at =
+      plausibility_->Score(tau, f.kinematics().link_poses(), T_PO, health_, health_.press_reach);
+  return at.pressing_gap <= health_.recover_gap;
+}
+
+// The hypotheses are settled onto the hand (HandPlausibility::Settle: every pressing finger's
+// nearest link on the surface, no link inside, by a translation): from the estimate, and from
+// the object's centre put at the mean of the pressing fingertips when two or more press. Each
+// that explains the hand better than the estimate is rendered and its edges matched with the
+// camera's around it (the oriented chamfer of FeatureParams::global_search_radius); a plausible
+// one beats an implausible one, the better chamfer among the plausible, the smaller excess among
+// the others. The estimate goes there with
+// its position's σ widened by a third of the jump (a pose settled onto the fingers is right
+// across them, not along them), and the image fuses nothing else: the next one matches at the
+// new pose.
+bool ExtractedFeatures::Recover(const Image8& image, const Transform& T_PC, const Intrinsics& K,
+                                const Eigen::VectorXd& tau, const Filter& f, VisualStep& step,
+                                VisualUpdate& update) {
+  const std::vector<Transform>& T_PL = f.kinematics().link_poses();
+  const double reach = health_.recover_reach;
+  const Plausibility now = plausibility_->Score(tau, T_PL, f.T_PO(), health_, reach);
+  const double excess_now = now.Excess(health_);
+  // A hypothesis farther than three times the gap it closes (and 10 mm) explains the hand by
+  // another grasp, not this one: along a bottle's axis, the pressing fingertips' mean was 120 mm
+  // from an estimate 15 mm off whose nearest pressing link was 12 mm from it (hard ketchup seed
+  // 221); putting a bottle back between two fingers on opposite sides took 80 mm for a gap of
+  // 34 mm (hard shampoo seed 218).
+  const double max_jump = 3.0 * std::max(now.pressing_gap, 0.0) + 0.01;
+  std::vector<Transform> hypotheses{plausibility_->Settle(tau, T_PL, f.T_PO(), health_, reach)};
+  const HandFingers& fingers = plausibility_->fingers();
+  Vec3 tips = Vec3::Zero();
+  int pressing = 0;
+  for (int i = 0; i < fingers.size(); ++i)
+    if (fingers.Torque(i, tau) >= health_.press_torque)
+      tips +=
+          T_PL[static_cast<std::size_t>(fingers.tip[static_cast<std::size_t>(i)])].translation(),
+          ++pressing;
+  if (pressing >= 2) {
+    Transform T = f.T_PO();
+    T.translation() = tips / pressing - T.linear() * centre_O_;
+    hypotheses.push_back(plausibility_->Settle(tau, T_PL, T, health_, reach));
+  }
+  int best = -1;
+  double best_excess = excess_now, best_cost = std::numeric_limits<double>::infinity();
+  MatchResult best_match;
+  FeatureParams around = params_;
+  around.global_search_radius = params_.search_radius;
+  for (std::size_t i = 0; i < hypotheses.size(); ++i) {
+    const double excess =
+        plausibility_->Score(tau, T_PL, hypotheses[i], health_, reach).Excess(health_);
+    // Plausible, or at least half the excess gone: a hypothesis that explains the hand a little
+    // better is not worth a relocation every other image.
+    if (!(excess == 0.0 || excess < 0.5 * excess_now) ||
+        (hypotheses[i].translation() - f.position()).norm() > max_jump)
+      continue;
+    RenderAt(f, hypotheses[i], T_PC, K, hypothesis_view_);
+    MatchResult m =
+        MatchFeatures(image, hypothesis_view_.colour, &object_mask_, around, &hand_mask_, false);
+    const double cost = std::isfinite(m.debug.global_cost) ? m.debug.global_cost
+                                                           : std::numeric_limits<double>::max();
+    const bool better = best < 0 || (excess == 0.0) > (best_excess == 0.0) ||
+                        ((excess == 0.0) == (best_excess == 0.0) &&
+                         (excess == 0.0 ? cost < best_cost : excess < best_excess));
+    if (better) {
+      best = static_cast<int>(i), best_excess = excess, best_cost = cost;
+      best_match = std::move(m);
+      std::swap(step.virtual_view, hypothesis_view_);
+    }
+  }
+  if (best < 0) return false;
+  const Transform& T_PO = hypotheses[static_cast<std::size_t>(best)];
+  const double jump = (T_PO.translation() - f.position()).norm();
+  Mat6 covariance = f.covariance().topLeftCorner<6, 6>();
+  const double widen = std::max(jump / 3.0, 0.005);
+  covariance.topLeftCorner<3, 3>().diagonal().array() += widen * widen;
+  step.match = std::move(best_match);
+  step.used_match.clear();
+  step.residual_before.clear();
+  step.search_radius = params_.search_radius;
+  step.relocalized = jump;
+  step.recovered = true;
+  update = VisualUpdate::Relocation(update.t_capture, T_PO, covariance, T_PC, K);
+  return true;
 }
 
 // A virtual corner within kOutlinePixels of the background is on the object's outline (what

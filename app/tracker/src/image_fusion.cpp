@@ -48,7 +48,7 @@ ImageFusion::ImageFusion(const HandModel& hand, const ObjectModel& object, const
     filter_ = own_.get();
   }
   if (m.features)
-    sources_.push_back(std::make_unique<ExtractedFeatures>(hand, object, params.features));
+    sources_.push_back(std::make_unique<ExtractedFeatures>(hand, object, params, m.torque));
   if (m.tags) sources_.push_back(std::make_unique<TagSource>(object, params));
 }
 
@@ -83,11 +83,13 @@ void ImageFusion::Fuse(double t_c, const Image8& image, const Transform& T_PC, c
   step_.has_features = false;
   step_.offered = step_.used = 0;
   step_.relocalized = 0.0;
+  step_.recovered = false;
+  step_.shifts_refused = 0;
   double m2 = 0.0;
   fresh_.clear();
   for (const auto& source : sources_) {
     VisualUpdate u = VisualUpdate::Features(t_c, T_PC, K);
-    source->Measure(image, T_PC, K, f, step_, u);
+    source->Measure(image, T_PC, K, slots_[0].tau, f, step_, u);
     const int used = Apply(u, m2);
     source->Fused(f, u, used, step_);
     fresh_.push_back(std::move(u));

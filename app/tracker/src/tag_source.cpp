@@ -12,7 +12,8 @@ TagSource::TagSource(const ObjectModel& object, const TrackerParams& params)
       relocate_images_(params.tag_relocate_images) {}
 
 void TagSource::Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
-                        const Filter& f, VisualStep& step, VisualUpdate& update) {
+                        const Eigen::VectorXd& /*tau*/, const Filter& f, VisualStep& step,
+                        VisualUpdate& update) {
   corners_.Measure(image, T_PC, K, f.T_PO(), step.tags, update.features);
   TagPoseFit fit;
   const bool elsewhere = relocate_images_ > 0 && Elsewhere(f, update.features, T_PC, K, fit);

@@ -17,7 +17,8 @@ class TagSource final : public VisualSource {
   TagSource(const ObjectModel& object, const TrackerParams& params);
   // Fills step.tags (and step.relocalized, the distance, when it relocates).
   void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
-               const Filter& filter, VisualStep& step, VisualUpdate& update) override;
+               const Eigen::VectorXd& tau, const Filter& filter, VisualStep& step,
+               VisualUpdate& update) override;
   void Fused(const Filter&, const VisualUpdate&, int, VisualStep&) override {}
   void Remember(VisualMemory& memory) const override { memory.tag_disagreements = disagreements_; }
   void Recall(const VisualMemory& memory) override { disagreements_ = memory.tag_disagreements; }

@@ -312,9 +312,11 @@ struct Tracker::Impl {
     stats.images_tags_elsewhere += after.tag_disagreements > 0;
     if (step.relocalized > 0.0) {
       ++stats.relocalizations;
+      if (step.recovered) ++stats.recoveries;
       stats.last_relocalization_t = t_c;
       stats.last_relocalized = step.relocalized;
     }
+    stats.shifts_refused += step.shifts_refused;
     if (replayed > 0) ++stats.rewinds, stats.samples_replayed += replayed;
     ImageEvidence e;
     e.t_capture = t_c;
@@ -443,7 +445,7 @@ TrackerStats Tracker::stats() const {
 std::ostream& operator<<(std::ostream& os, const VisualMemory& m) {
   return os << "{tag_disagreements " << m.tag_disagreements << ", features_matched_well "
             << m.features_matched_well << ", features_poor_frames " << m.features_poor_frames
-            << "}";
+            << ", implausible_images " << m.implausible_images << "}";
 }
 
 TrackerSnapshot Tracker::Save() const {

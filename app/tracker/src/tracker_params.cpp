@@ -79,7 +79,10 @@ const std::vector<param_table::Field<HealthParams>>& HealthFields() {
       Integer("images_frozen", &H::images_frozen),
       Number("relocalized_hold", &H::relocalized_hold),
       Number("slip_hold", &H::slip_hold),
-      Number("lost_after", &H::lost_after)};
+      Number("lost_after", &H::lost_after),
+      Integer("recover_images", &H::recover_images),
+      Number("recover_gap", &H::recover_gap),
+      Number("recover_reach", &H::recover_reach)};
   return fields;
 }
 

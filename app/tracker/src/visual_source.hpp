@@ -15,9 +15,12 @@ class VisualSource {
   virtual ~VisualSource() = default;
   // Measures `image` against `filter` and fills `update` (its time and camera are set): the
   // features to fuse after widening the position by update.widen_position, or a relocation.
+  // `tau`: the joint torques of the sample the image is fused after (sets without torques
+  // ignore them).
   // Writes what it saw into `step`.
   virtual void Measure(const Image8& image, const Transform& T_PC, const Intrinsics& K,
-                       const Filter& filter, VisualStep& step, VisualUpdate& update) = 0;
+                       const Eigen::VectorXd& tau, const Filter& filter, VisualStep& step,
+                       VisualUpdate& update) = 0;
   // `update` was applied to `filter`, which fused `used` of its features.
   virtual void Fused(const Filter& filter, const VisualUpdate& update, int used,
                      VisualStep& step) = 0;

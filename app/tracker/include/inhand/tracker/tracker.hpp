@@ -69,8 +69,12 @@ struct TrackerStats {
   long relocalizations = 0;       // images that found a lost object again (VisualStep::relocalized)
   long images_features_lost = 0;  // images after which the extracted features were lost
                                   // (VisualMemory::features_lost)
-  long images_tags_elsewhere = 0;      // images whose tags put the object where the estimate cannot
-                                       // be and that did not relocate it (yet; with relocation on)
+  long images_tags_elsewhere = 0;  // images whose tags put the object where the estimate cannot
+                                   // be and that did not relocate it (yet; with relocation on)
+  long recoveries = 0;  // of the relocalizations, images whose estimate did not explain the hand
+                        // and that moved it to a pose that does (VisualStep::recovered)
+  long shifts_refused = 0;  // whole-object shifts of the features' search that the hand refused
+                            // (VisualStep::shifts_refused)
   double last_relocalization_t = 0.0;  // [s] the last one's capture time (when relocalizations > 0)
   double last_relocalized = 0.0;       // [m] and how far from the estimate it found the object
 };
@@ -96,6 +100,12 @@ struct VisualStep {
                                 // the estimate. Extracted features: the σ added to its
                                 // position before the update; tags: the fit of the tags'
                                 // corners that the object was put at (VisualUpdate::relocate)
+  bool recovered = false;       // extracted features with torques: the estimate left a finger
+                                // that presses more than HealthParams::recover_gap away for
+                                // recover_images images, and the object was put where it
+                                // explains the hand and fits the image (relocalized: how far),
+                                // nothing else fused
+  int shifts_refused = 0;       // whole-object shifts the hand refused (HandPlausibility)
   std::vector<int> used_match;  // index into match.matches
   std::vector<double> residual_before, residual_after;  // [px]
 };
@@ -141,6 +151,8 @@ struct VisualMemory {
                                        // estimate cannot be (TrackerParams::tag_relocate_images)
   bool features_matched_well = false;  // a frame has matched well: the wide first search is over
   int features_poor_frames = 0;        // frames in a row since that fused few features
+  int implausible_images = 0;          // images in a row whose estimate left a pressing finger
+                                       // in the air (HealthParams::recover_images)
   // The features are lost after kLostFrames frames in a row that fused fewer than kWellMatched
   // features, once a frame had matched well; the object is then searched for as at the start.
   static constexpr int kWellMatched = 8;
@@ -151,7 +163,8 @@ struct VisualMemory {
   bool operator==(const VisualMemory& o) const {
     return tag_disagreements == o.tag_disagreements &&
            features_matched_well == o.features_matched_well &&
-           features_poor_frames == o.features_poor_frames;
+           features_poor_frames == o.features_poor_frames &&
+           implausible_images == o.implausible_images;
   }
 };
 std::ostream& operator<<(std::ostream& os, const VisualMemory& m);
