@@ -89,7 +89,8 @@ struct HealthParams {
   // recover_gap from the estimated object, the object is searched for among poses that explain
   // the hand (0 images: never).
   int recover_images = 2;
-  double recover_gap = 0.02;    // [m] (a finger 10 mm off under joint offsets is not lost)
+  double recover_gap = 0.03;    // [m] (hard joint offsets leave a pressing finger 15-20 mm
+                                // from an estimate that is 8 mm off)
   double recover_reach = 0.15;  // [m] how far from the object the recovery looks for fingers
   void Validate(const std::string& source = "health parameters") const;
 };
