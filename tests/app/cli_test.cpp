@@ -327,6 +327,30 @@ TEST(Cli, AHardRunThatLeavesThePressingFingersRecovers) {
   EXPECT_NE(m.at("health_final_cause").get<std::string>(), "pressing_in_air");
 }
 
+// The second failure, on seeds nobody tuned on: a `paper` pen run (seed 229) whose first
+// whole-object search moves the estimate 76 mm onto the book's long edge while the pen still lies
+// on the book; when the fingers close on the real pen, their torques could not pull it back and
+// it ended 76 mm off, saying nothing. Now the pressing fingers, 50 mm and more from the estimate,
+// start a recovery (82 -> 58 mm at 2.9 s) and the features that follow bring it to 21 mm. Its
+// roll about its own axis stays unobserved (60 deg at the end), and the set says so: not `ok`.
+TEST(Cli, APaperPenPutOnTheBookIsRecoveredByThePressingFingers) {
+  test::TempDir dir;
+  const test::CommandResult sim =
+      test::RunInhand("simulate pen-fingertip --noise paper --seed 229 --out " + (dir / "session"));
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const test::CommandResult r = test::RunInhand(
+      "replay " + (dir / "session") + " --modalities jtf --no-video --out " + (dir / "replay"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "replay/summary.json");
+  const Json m = Json::parse(in).at("modalities").at("jtf");
+  EXPECT_LE(m.at("terminal_position_error_mm").get<double>(), 30.0);
+  EXPECT_GE(m.at("recoveries").get<int>(), 1);
+  ASSERT_GE(m.at("health_alarms").get<int>(), 1);
+  if (m.at("terminal_orientation_error_deg").get<double>() > 30.0) {
+    EXPECT_NE(m.at("health_final").get<std::string>(), "ok");
+  }
+}
+
 TEST(Cli, ReplayIsDeterministic) {
   test::TempDir dir;
   ASSERT_EQ(
