@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -285,8 +286,11 @@ bool ExtractedFeatures::Recover(const Image8& image, const Transform& T_PC, cons
     T.translation() = tips / pressing - T.linear() * centre_O_;
     hypotheses.push_back(plausibility_->Settle(tau, T_PL, T, health_, reach));
   }
+  // Ranked by (implausible, excess if implausible else chamfer): a plausible hypothesis beats
+  // an implausible one, the better chamfer among the plausible, the smaller excess among the
+  // others; ties keep the first.
   int best = -1;
-  double best_excess = excess_now, best_cost = std::numeric_limits<double>::infinity();
+  std::pair<bool, double> best_key;
   MatchResult best_match;
   FeatureParams around = params_;
   around.global_search_radius = params_.search_radius;
@@ -303,11 +307,9 @@ bool ExtractedFeatures::Recover(const Image8& image, const Transform& T_PC, cons
         MatchFeatures(image, hypothesis_view_.colour, &object_mask_, around, &hand_mask_, false);
     const double cost = std::isfinite(m.debug.global_cost) ? m.debug.global_cost
                                                            : std::numeric_limits<double>::max();
-    const bool better = best < 0 || (excess == 0.0) > (best_excess == 0.0) ||
-                        ((excess == 0.0) == (best_excess == 0.0) &&
-                         (excess == 0.0 ? cost < best_cost : excess < best_excess));
-    if (better) {
-      best = static_cast<int>(i), best_excess = excess, best_cost = cost;
+    const std::pair<bool, double> key{excess > 0.0, excess > 0.0 ? excess : cost};
+    if (best < 0 || key < best_key) {
+      best = static_cast<int>(i), best_key = key;
       best_match = std::move(m);
       std::swap(step.virtual_view, hypothesis_view_);
     }
