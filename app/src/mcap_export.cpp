@@ -125,6 +125,20 @@ McapExport::McapExport(const std::string& path, const SessionPlayer& player)
                                                             {"texts", {{"type", "array"}}}}),
                        "json");
   }
+  events_ = w_->AddChannel("/inhand/events",
+                           schema("foxglove.Log", {{"timestamp", kTime},
+                                                   {"level", {{"type", "integer"}}},
+                                                   {"message", {{"type", "string"}}},
+                                                   {"name", {{"type", "string"}}},
+                                                   {"file", {{"type", "string"}}},
+                                                   {"line", {{"type", "integer"}}},
+                                                   {"t", {{"type", "number"}}},
+                                                   {"kind", {{"type", "string"}}},
+                                                   {"subject", {{"type", "string"}}},
+                                                   {"value", {{"type", "number"}}},
+                                                   {"count", {{"type", "integer"}}},
+                                                   {"duration", {{"type", "number"}}}}),
+                           "json");
   scene_ = w_->AddChannel("/inhand/contacts",
                           schema("foxglove.SceneUpdate", {{"deletions", {{"type", "array"}}},
                                                           {"entities", {{"type", "array"}}}}),
@@ -176,6 +190,7 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
       e["nees"] = r.nees;
     }
     errors["sets"][name] = e;
+    AddEvents(i, r.events, t);
   }
   w_->Write(errors_, log, errors.dump());
   if (s.has_groundtruth()) {
@@ -189,6 +204,33 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
                   .dump());
   }
   if (frame >= 0 && s.info().camera) AddFrame(frame, t);
+}
+
+void McapExport::AddEvents(std::size_t i, const std::vector<TrackerEvent>& events, double t) {
+  const HandModel& hand = p_.models().hand;
+  for (const TrackerEvent& ev : events) {
+    // foxglove.Log's levels: 2 info, 3 warning (inconsistent, NEES beyond its bound), 4 error
+    // (lost).
+    int level = 2;
+    if (ev.kind == EventKind::kNeesBeyondBound ||
+        (ev.kind == EventKind::kHealth && ev.health.state == HealthState::kInconsistent))
+      level = 3;
+    if (ev.kind == EventKind::kHealth && ev.health.state == HealthState::kLost) level = 4;
+    w_->Write(events_, LogTime(t),
+              Json{{"timestamp", Time(ev.t)},
+                   {"level", level},
+                   {"message", std::string(EventKindName(ev.kind)) + ": " + EventMessage(ev, hand)},
+                   {"name", "inhand/" + p_.sets()[i].name},
+                   {"file", ""},
+                   {"line", 0},
+                   {"t", ev.t},
+                   {"kind", EventKindName(ev.kind)},
+                   {"subject", EventSubject(ev, hand)},
+                   {"value", ev.value},
+                   {"count", ev.count},
+                   {"duration", ev.duration}}
+                  .dump());
+  }
 }
 
 void McapExport::AddFrame(int frame, double t) {

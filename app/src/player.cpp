@@ -181,6 +181,7 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
       std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
   r.t = t;
   r.step_time_us = us;
+  r.events.clear();
   r.contacts = static_cast<int>(tracker.trace().contacts.size());
   r.constraints = tracker.trace().num_constraints;
   r.penetration = tracker.trace().penetration;
@@ -211,10 +212,38 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
   r.memory = tracker.visual_memory();
   r.health = tracker.health();
   r.press = tracker.press_evidence();
+  tracker.TakeEvents(r.events);
   if (TruthCovers(t))
     CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
   else
     r = WithoutTruth(r);
+  WatchNees(r);
+}
+
+void SessionPlayer::WatchNees(EstimateRecord& r) {
+  if (!std::isfinite(r.nees)) {
+    r.nees_beyond = false;
+    return;
+  }
+  if (r.nees > kNeesBound99) {
+    r.nees_within_since = -1.0;
+    if (r.nees_beyond) return;
+    r.nees_beyond = true;
+    TrackerEvent e;
+    e.t = r.t;
+    e.kind = EventKind::kNeesBeyondBound;
+    e.value = r.nees;
+    r.events.push_back(e);
+    return;
+  }
+  if (!r.nees_beyond) return;
+  if (r.nees_within_since < 0.0) r.nees_within_since = r.t;
+  if (r.t - r.nees_within_since >= kNeesSettle - kTimeTolerance) r.nees_beyond = false;
+}
+
+void SessionPlayer::CloseEvents(std::size_t i, std::vector<TrackerEvent>& out) {
+  trackers_[i]->CloseEvents();
+  trackers_[i]->TakeEvents(out);
 }
 
 void SessionPlayer::Step(int k) {

@@ -133,9 +133,36 @@ void WriteEstimate(std::ostream& csv, const std::string& session, const Modality
   csv << "\n";
 }
 
+// events.csv: every set's events in time order (a set's own in the order found where times are
+// equal), the message quoted.
+void WriteEvents(const fs::path& path, const std::vector<ModalitySet>& sets,
+                 const std::vector<std::vector<TrackerEvent>>& events, const HandModel& hand) {
+  struct Row {
+    double t;
+    std::size_t set, index;
+  };
+  std::vector<Row> rows;
+  for (std::size_t i = 0; i < events.size(); ++i)
+    for (std::size_t j = 0; j < events[i].size(); ++j) rows.push_back({events[i][j].t, i, j});
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
+    return a.t != b.t ? a.t < b.t : a.set != b.set ? a.set < b.set : a.index < b.index;
+  });
+  std::ofstream csv(path);
+  csv << "t,set,kind,subject,value,count,duration,message\n";
+  for (const Row& row : rows) {
+    const TrackerEvent& e = events[row.set][row.index];
+    std::string message = EventMessage(e, hand), quoted = "\"";
+    for (char c : message) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+    csv << FormatDouble(e.t) << "," << sets[row.set].name << "," << EventKindName(e.kind) << ","
+        << EventSubject(e, hand) << "," << FormatDouble(e.value) << "," << e.count << ","
+        << FormatDouble(e.duration) << "," << quoted << "\"\n";
+  }
+}
+
 // summary.json's entry for one set: its costs, what its tracker did, and, against the ground
 // truth, its errors and their consistency.
-Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& ts, int n) {
+Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& ts,
+                const std::vector<TrackerEvent>& events, int n) {
   Json s = {
       {"torque", set.torque},
       {"tags", set.tags},
@@ -172,6 +199,15 @@ Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& 
     s["health_first_alarm_t"] = st.first_alarm_t >= 0.0 ? Json(st.first_alarm_t) : Json(nullptr);
     s["health_final"] = HealthStateName(st.last_health.state);
     s["health_final_cause"] = HealthCauseName(st.last_health.cause);
+  }
+  // Its events (events.csv), counted per kind, every kind listed.
+  {
+    std::array<long, kNumEventKinds> count{};
+    for (const TrackerEvent& e : events) ++count[static_cast<std::size_t>(e.kind)];
+    Json c = Json::object();
+    for (int k = 0; k < kNumEventKinds; ++k)
+      c[EventKindName(static_cast<EventKind>(k))] = count[static_cast<std::size_t>(k)];
+    s["events"] = c;
   }
   s["images_fused"] = ts.images_fused;
   s["relocalizations"] = ts.relocalizations;
@@ -375,6 +411,7 @@ int RunReplay(const ReplayCommand& cmd) {
   std::unique_ptr<Pictures> drawn;
   if (want_pictures) drawn = std::make_unique<Pictures>(player, cmd.jobs > 1, emit);
   std::vector<SetStats> stats(sets.size());
+  std::vector<std::vector<TrackerEvent>> events(sets.size());
   std::vector<EstimateRecord> records;
   ProgressBar progress;
   const auto wall_start = std::chrono::steady_clock::now();
@@ -392,6 +429,7 @@ int RunReplay(const ReplayCommand& cmd) {
       for (std::size_t i = 0; i < sets.size(); ++i) {
         WriteEstimate(csv, cmd.session, sets[i], row[i]);
         stats[i].Add(row[i], s == 0);
+        events[i].insert(events[i].end(), row[i].events.begin(), row[i].events.end());
       }
       // Only the block's last sample captures frames; the player stands there.
       if (mcap) mcap->AddSample(s, row, s == k + count - 1 ? player.last_frame() : -1);
@@ -410,6 +448,14 @@ int RunReplay(const ReplayCommand& cmd) {
   }
   if (drawn) drawn->Finish();
   progress.End();
+  // The bursts still open at the end.
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    std::vector<TrackerEvent> closed;
+    player.CloseEvents(i, closed);
+    if (mcap && n > 0) mcap->AddEvents(i, closed, session.t(n - 1));
+    events[i].insert(events[i].end(), closed.begin(), closed.end());
+  }
+  WriteEvents(out / "events.csv", sets, events, player.models().hand);
   if (video) video->Close();
   if (mcap) mcap->Close();
   csv.close();
@@ -433,7 +479,7 @@ int RunReplay(const ReplayCommand& cmd) {
       {"samples_without_truth", player.input_report().samples_without_truth}};
   Json per_set = Json::object();
   for (std::size_t i = 0; i < sets.size(); ++i)
-    per_set[sets[i].name] = SetSummary(sets[i], stats[i], player.tracker(i).stats(), n);
+    per_set[sets[i].name] = SetSummary(sets[i], stats[i], player.tracker(i).stats(), events[i], n);
   summary["modalities"] = per_set;
   std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
   std::ofstream(out / "params.json") << TrackerParamsToJson(player.params()) << "\n";

@@ -3,6 +3,7 @@
 // the same session, and its replay gives the same estimates, byte for byte.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -116,7 +117,8 @@ TEST(RoundTrip, SimulatedSessionThroughBagMcapAndDb3) {
 }
 
 // replay --mcap: the official MCAP reader (@mcap/core, CRCs checked) reads the export back, with
-// every topic, its foxglove schema, the expected message counts and the session's time span.
+// every topic, its foxglove schema, the expected message counts (the events: as many as events.csv
+// has rows) and the session's time span.
 TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   if (!HaveNodeTools())
     GTEST_SKIP()
@@ -156,7 +158,13 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   EXPECT_EQ(j.at("start_ns"), std::to_string(std::llround(s.t(0) * 1e9)));
   EXPECT_EQ(j.at("end_ns"), std::to_string(std::llround(s.t(static_cast<int>(n) - 1) * 1e9)));
   EXPECT_EQ(j.at("json_errors"), 0);
-  EXPECT_EQ(j.at("statistics").at("messages"), 6 * n + 4 * frames);
+  // The events, one log message per row of events.csv.
+  const std::string events_csv = test::ReadFile(dir / "r/events.csv");
+  const long events = std::count(events_csv.begin(), events_csv.end(), '\n') - 1;
+  EXPECT_GT(events, 4);  // the fingers close on the bottle
+  EXPECT_EQ(count("/inhand/events"), events);
+  EXPECT_EQ(j.at("topics").at("/inhand/events").at("schema"), "foxglove.Log");
+  EXPECT_EQ(j.at("statistics").at("messages"), 6 * n + 4 * frames + events);
   EXPECT_TRUE(j.at("footer").get<bool>());
 }
 

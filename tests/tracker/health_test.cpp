@@ -36,6 +36,13 @@ struct Fault {
 struct Timeline {
   std::vector<double> t;
   std::vector<Health> health;
+  std::vector<TrackerEvent> events;  // the tracker's (Tracker::TakeEvents), bursts closed
+  // The first event of `kind` at or after t0; +inf when none.
+  double FirstEvent(double t0, EventKind kind) const {
+    for (const TrackerEvent& e : events)
+      if (e.kind == kind && e.t >= t0 - 1e-9) return e.t;
+    return INFINITY;
+  }
   // The first sample at or after t0 whose health satisfies `is`; +inf when none.
   template <typename Is>
   double First(double t0, Is&& is) const {
@@ -74,7 +81,10 @@ Timeline Replay(const Recording& r, const std::string& set, const Fault& fault, 
     }
     out.t.push_back(t);
     out.health.push_back(tracker->health());
+    tracker->TakeEvents(out.events);
   }
+  tracker->CloseEvents();
+  tracker->TakeEvents(out.events);
   return out;
 }
 
@@ -309,6 +319,20 @@ TEST(HealthFaults, TheCleanRecordingRaisesNoAlarm) {
                        }),
               INFINITY)
         << set;
+    // Its events: contacts, the state's changes between ok and uncertain, the grip loosening
+    // while the lifted bottle tilts in the hand, and nothing of what would need a look.
+    std::string unexpected;
+    for (const TrackerEvent& e : tl.events) {
+      const bool expected =
+          e.kind == EventKind::kContactMade || e.kind == EventKind::kContactBroken ||
+          e.kind == EventKind::kGripLoosened ||
+          (e.kind == EventKind::kHealth && e.health.state <= HealthState::kUncertain);
+      if (!expected)
+        unexpected += "  " + std::to_string(e.t) + " " + EventKindName(e.kind) + ": " +
+                      EventMessage(e, r.models.hand) + "\n";
+    }
+    EXPECT_EQ(unexpected, "") << set;
+    EXPECT_GE(tl.events.size(), 6u) << set;  // the fingers close on the bottle
   }
 }
 
@@ -319,6 +343,14 @@ TEST(HealthFaults, ACameraPose50mmOffFor2sIsInconsistent) {
   for (const std::string set : {"jta", "jtf"}) {
     const Timeline tl = Replay(r, set, f);
     EXPECT_LE(tl.First(f.from, Alarm), f.from + 0.5) << set << "\n" << Describe(tl, r.models.hand);
+    // And its event, at that time.
+    double alarm_event = INFINITY;
+    for (const TrackerEvent& e : tl.events)
+      if (e.kind == EventKind::kHealth && Alarm(e.health) && e.t >= f.from - 1e-9) {
+        alarm_event = e.t;
+        break;
+      }
+    EXPECT_DOUBLE_EQ(alarm_event, tl.First(f.from, Alarm)) << set;
   }
 }
 
@@ -359,6 +391,8 @@ TEST(HealthFaults, AGripThatLetsGoIsDeclared) {
         << Describe(tl, r.models.hand);
     // And it keeps saying so while the grip stays open.
     EXPECT_GE(tl.health.back().state, HealthState::kUncertain) << set;
+    // The event: the grip loosened within 0.5 s of the fault.
+    EXPECT_LE(tl.FirstEvent(f.from, EventKind::kGripLoosened), f.from + 0.5) << set;
   }
 }
 

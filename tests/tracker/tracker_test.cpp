@@ -132,11 +132,13 @@ TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
   const StartSigmas sigmas{0.002, 1.0 * M_PI / 180, info.sigma_joint_bias, {}};
   std::map<std::string, double> error;
   double relocalized = 0.0;
+  std::vector<TrackerEvent> events;
   for (const std::string set : {"jt", "jtf"}) {
     Tracker tracker(r.models.hand, r.models.object, Set(set), TrackerParams());
     tracker.Start(r.session.t(0), start, sigmas);
     Feed(r, tracker, n, 0.0,
          [&](int) { relocalized = std::max(relocalized, tracker.last_visual().relocalized); });
+    if (set == "jtf") tracker.TakeEvents(events);
     EXPECT_EQ(tracker.stats().relocalizations, set == "jtf" ? 1 : 0)
         << set;  // once found, it is not lost again
     EXPECT_EQ(tracker.stats().images_features_lost, set == "jtf" ? 1 : 0)
@@ -149,6 +151,19 @@ TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
   EXPECT_LT(error["jtf"], 0.008);
   EXPECT_GT(relocalized, 0.015);  // about the 30 mm it was off, at the object's depth
   EXPECT_LT(relocalized, 0.045);
+  // The events say it in order: lost at one image, found again (that far) at the next.
+  std::vector<const TrackerEvent*> visual;
+  for (const TrackerEvent& e : events)
+    if (e.kind == EventKind::kFeaturesLost || e.kind == EventKind::kRelocalized ||
+        e.kind == EventKind::kFeaturesFound)
+      visual.push_back(&e);
+  ASSERT_EQ(visual.size(), 3u);
+  EXPECT_EQ(visual[0]->kind, EventKind::kFeaturesLost);
+  EXPECT_EQ(visual[1]->kind, EventKind::kRelocalized);
+  EXPECT_EQ(visual[2]->kind, EventKind::kFeaturesFound);
+  EXPECT_LT(visual[0]->t, visual[1]->t);
+  EXPECT_DOUBLE_EQ(visual[1]->value, relocalized);
+  EXPECT_DOUBLE_EQ(visual[2]->value, relocalized);
 }
 
 // An estimate turned 120° about the palm's normal and 30 mm beside the bottle, claiming σ 2 mm /
@@ -230,8 +245,13 @@ TEST(Tracker, ASnapshotContinuesBitIdentically) {
     std::vector<std::pair<int, TrackerSnapshot>> snapshots = {
         {-1, tracker.Save()}};  // after sample k
     long fused = 0;
+    std::vector<std::pair<int, TrackerEvent>> events;  // with the sample that reported them
+    std::vector<TrackerEvent> taken;
     Feed(r, tracker, n, 0.0, [&](int k) {
       run.push_back(tracker.T_PO());
+      taken.clear();
+      tracker.TakeEvents(taken);
+      for (const TrackerEvent& e : taken) events.emplace_back(k, e);
       if (tracker.stats().images_fused > fused) snapshots.emplace_back(k, tracker.Save());
       fused = tracker.stats().images_fused;
     });
@@ -251,14 +271,25 @@ TEST(Tracker, ASnapshotContinuesBitIdentically) {
       tracker.Restore(snapshot->second);
       EXPECT_EQ(tracker.visual_memory(), snapshot->second.memory);
       int different = 0;
+      std::vector<std::pair<int, TrackerEvent>> continued;
       Feed(
           r, tracker, n, 0.0,
           [&](int k) {
             different += tracker.T_PO().matrix() != run[static_cast<std::size_t>(k)].matrix();
+            taken.clear();
+            tracker.TakeEvents(taken);
+            for (const TrackerEvent& e : taken) continued.emplace_back(k, e);
           },
           1, snapshot->first + 1);
       SCOPED_TRACE("from sample " + std::to_string(snapshot->first));
       EXPECT_EQ(different, 0);
+      // The same events from there on (a contact pending at the snapshot included).
+      std::vector<std::pair<int, TrackerEvent>> expected;
+      for (const auto& e : events)
+        if (e.first > snapshot->first) expected.push_back(e);
+      EXPECT_GT(expected.size(), 3u);
+      EXPECT_TRUE(continued == expected)
+          << continued.size() << " events against " << expected.size();
       EXPECT_EQ(tracker.covariance(), P);
       EXPECT_EQ(tracker.visual_memory(), end);
       EXPECT_EQ(tracker.stats().relocalizations, 1);
@@ -404,9 +435,42 @@ TEST(Tracker, ImagesBeyondTheHorizonAreDroppedAndCounted) {
   stats = tracker->stats();
   EXPECT_EQ(stats.images_fused, 2);
   EXPECT_EQ(stats.rewinds, 1);  // fused after the sample at its capture time, before the next one
-  // Samples that do not move forward in time are dropped, not fused.
+  // Samples that do not move forward in time are dropped, not fused; samples no hand can produce
+  // are rejected.
   tracker->AddJointSample(r.session.t(k - 1), r.q[0], r.tau[0]);
   EXPECT_EQ(tracker->stats().samples_dropped, 1);
+  Eigen::VectorXd beyond = r.q[static_cast<std::size_t>(k)];
+  beyond[1] = 3.0;  // index_flex1, [0, 1.6] rad
+  tracker->AddJointSample(r.session.t(k), beyond, r.tau[static_cast<std::size_t>(k)]);
+  EXPECT_EQ(tracker->stats().samples_rejected, 1);
+  // Each said so as an event at its time.
+  std::vector<TrackerEvent> events;
+  tracker->CloseEvents();
+  tracker->TakeEvents(events);
+  const auto of = [&](EventKind kind) {
+    std::vector<TrackerEvent> out;
+    for (const TrackerEvent& e : events)
+      if (e.kind == kind) out.push_back(e);
+    return out;
+  };
+  const std::vector<TrackerEvent> dropped = of(EventKind::kImageDropped);
+  ASSERT_EQ(dropped.size(), 2u);
+  EXPECT_DOUBLE_EQ(dropped[0].t, r.session.t(0) - 0.5);
+  EXPECT_DOUBLE_EQ(dropped[1].t, frames[1].t);
+  const std::vector<TrackerEvent> late = of(EventKind::kImageLate);
+  ASSERT_EQ(late.size(), 1u);  // the one fused 30 ms late
+  EXPECT_DOUBLE_EQ(late[0].t, frames[1].t + 0.17);
+  EXPECT_NEAR(late[0].value, 0.03, 0.0021);  // the newest sample 30 ms later, at 500 Hz
+  EXPECT_GE(late[0].count, 14);
+  const std::vector<TrackerEvent> samples_dropped = of(EventKind::kSamplesDropped);
+  ASSERT_EQ(samples_dropped.size(), 1u);
+  EXPECT_DOUBLE_EQ(samples_dropped[0].t, r.session.t(k - 1));
+  const std::vector<TrackerEvent> rejected = of(EventKind::kSamplesRejected);
+  ASSERT_EQ(rejected.size(), 1u);
+  EXPECT_DOUBLE_EQ(rejected[0].t, r.session.t(k));
+  EXPECT_EQ(rejected[0].subject, 1);
+  EXPECT_DOUBLE_EQ(rejected[0].value, 3.0);
+  EXPECT_EQ(EventSubject(rejected[0], r.models.hand), "index_flex1");
 }
 
 TEST(TrackerParams, JsonRoundTripAndErrorsNameTheField) {

@@ -50,7 +50,8 @@ struct Tracker::Impl {
         query(h, o),
         filter(h, query, p.filter, tracker_detail::FilterOptionsFor(o, m)),
         health(p.health),
-        press(h) {
+        press(h),
+        detector(h, p.health.slip_hold) {
     params.Validate();
     ValidateJointStiffness(h);
     deflect = m.torque && HasElasticJoints(h);
@@ -58,6 +59,7 @@ struct Tracker::Impl {
       throw InputError(
           "tracker options: horizon must be >= 0 s, history_samples and max_queued_images >= 1");
     history.Resize(options.history_samples);
+    events.reserve(64);
     // Configuration errors surface here, not on the worker.
     fusion = std::make_unique<tracker_detail::ImageFusion>(h, o, m, params,
                                                            options.threaded ? nullptr : &filter);
@@ -89,11 +91,14 @@ struct Tracker::Impl {
         (!started && !(t >= start_t - kTimeTolerance))) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.samples_dropped;
+      detector.OnSampleDropped(t, events);
       return;
     }
-    if (ScreenJointSample(hand, params.joint_limit_margin, q, tau).joint >= 0) {
+    if (const RejectedJoint r = ScreenJointSample(hand, params.joint_limit_margin, q, tau);
+        r.joint >= 0) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.samples_rejected;
+      detector.OnSampleRejected(t, r.joint, r.torque ? tau[r.joint] : q[r.joint], events);
       return;
     }
     // Images captured before this sample belong after the previous one.
@@ -103,7 +108,7 @@ struct Tracker::Impl {
       if (started)
         Submit(std::move(job));
       else
-        DropLate();
+        DropLate(job.t_capture);
     }
     if (q_used.size() != q.size()) q_used.resize(q.size());  // once
     q_used = q;
@@ -137,6 +142,8 @@ struct Tracker::Impl {
     }
     last_t = t;
     Judge(t, tau);
+    std::lock_guard<std::mutex> lock(mutex);
+    detector.OnSample(t, filter.trace(), health.health(), events);
   }
 
   // The health at the sample just fused: the press check when due (sets with torques), then
@@ -154,7 +161,10 @@ struct Tracker::Impl {
 
   // Under the lock: what the images fused since the last call said, into the monitor.
   void DrainEvidenceLocked() {
-    for (const ImageEvidence& e : evidence) health.OnImage(e);
+    for (const EventDetector::Image& image : evidence) {
+      health.OnImage(image.evidence);
+      detector.OnImage(image, events);
+    }
     evidence.clear();
   }
 
@@ -167,11 +177,15 @@ struct Tracker::Impl {
     if (!std::isfinite(t_c) || !T_PC.matrix().allFinite() || image.empty()) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.images_rejected;
+      TrackerEvent e;
+      e.t = std::isfinite(t_c) ? t_c : last_t;
+      e.kind = EventKind::kImageRejected;
+      events.push_back(e);
       return;
     }
     health.OnImageAdded(t_c, ImageFingerprint(image.data.data(), image.data.size()));
     if (!started || t_c > last_t + kTimeTolerance) {
-      if (t_c + kTimeTolerance < start_t) return DropLate();
+      if (t_c + kTimeTolerance < start_t) return DropLate(t_c);
       // Waits for the samples up to its capture time, in capture order.
       Job job{t_c, image, T_PC, K};
       auto it = std::upper_bound(early.begin(), early.end(), t_c,
@@ -179,12 +193,13 @@ struct Tracker::Impl {
       early.insert(it, std::move(job));
       return;
     }
-    if (BeyondHorizon(t_c)) return DropLate();
+    if (BeyondHorizon(t_c)) return DropLate(t_c);
     if (!options.threaded) {
       Process(t_c, image, T_PC, K);  // no copy of the image
       std::lock_guard<std::mutex> lock(mutex);
       DrainEvidenceLocked();
       health.Decide(last_t);
+      detector.OnHealth(last_t, health.health(), events);
       return;
     }
     Submit(Job{t_c, image, T_PC, K});
@@ -193,7 +208,7 @@ struct Tracker::Impl {
   bool BeyondHorizon(double t_c) const { return t_c < last_t - options.horizon - kTimeTolerance; }
 
   void Submit(Job job) {
-    if (BeyondHorizon(job.t_capture)) return DropLate();
+    if (BeyondHorizon(job.t_capture)) return DropLate(job.t_capture);
     if (!options.threaded) {
       Process(job.t_capture, job.image, job.T_PC, job.K);
       return;
@@ -201,6 +216,7 @@ struct Tracker::Impl {
     {
       std::lock_guard<std::mutex> lock(mutex);
       if (static_cast<int>(queue.size()) >= options.max_queued_images) {
+        PushImageDroppedLocked(queue.front().t_capture, 1);
         queue.pop_front();
         ++stats.images_dropped_busy;
       }
@@ -209,9 +225,20 @@ struct Tracker::Impl {
     work_cv.notify_one();
   }
 
-  void DropLate() {
+  void DropLate(double t_c) {
     std::lock_guard<std::mutex> lock(mutex);
     ++stats.images_dropped_late;
+    PushImageDroppedLocked(t_c, 0);
+  }
+
+  // Under the lock: the event of an image dropped (`worker_busy` 1: the worker was behind).
+  void PushImageDroppedLocked(double t_c, int worker_busy) {
+    TrackerEvent e;
+    e.t = t_c;
+    e.kind = EventKind::kImageDropped;
+    e.subject = worker_busy;
+    e.value = t_c;
+    events.push_back(e);
   }
 
   // Threaded: take over the worker's filter state (it includes every sample so far).
@@ -281,6 +308,7 @@ struct Tracker::Impl {
       a = history.LastAtOrBefore(t_c);
       if (a < history.first()) {
         ++stats.images_dropped_late;
+        PushImageDroppedLocked(t_c, 0);
         return;
       }
       upto = history.last();
@@ -318,14 +346,19 @@ struct Tracker::Impl {
     }
     stats.shifts_refused += step.shifts_refused;
     if (replayed > 0) ++stats.rewinds, stats.samples_replayed += replayed;
-    ImageEvidence e;
+    EventDetector::Image im;
+    ImageEvidence& e = im.evidence;
     e.t_capture = t_c;
     e.offered = step.offered;
     e.used = step.used;
     e.features_lost = after.features_lost();
     e.tags_elsewhere = after.tag_disagreements > 0;
     e.relocalized = step.relocalized;
-    evidence.push_back(e);
+    im.newest_t = history.At(history.last()).t;
+    im.replayed = replayed;
+    im.recovered = step.recovered;
+    im.shifts_refused = step.shifts_refused;
+    evidence.push_back(im);
     step.sequence = ++sequence;
     if (options.threaded) {
       adopt_state = fusion->filter().state();
@@ -350,6 +383,7 @@ struct Tracker::Impl {
   HealthMonitor health;  // the caller's
   PressCheck press;
   double next_press_t = 0.0;
+  EventDetector detector;  // the caller's
 
   bool start_set = false, started = false;
   double start_t = 0.0, last_t = 0.0;
@@ -371,7 +405,8 @@ struct Tracker::Impl {
   FilterState adopt_state;
   VisualStep adopt_visual;
   VisualMemory adopt_memory;
-  std::vector<ImageEvidence> evidence;  // images published, not yet judged by the caller
+  std::vector<EventDetector::Image> evidence;  // images published, not yet judged by the caller
+  std::vector<TrackerEvent> events;            // not taken yet
   std::exception_ptr worker_error;
   std::condition_variable work_cv, idle_cv;
   std::thread worker;
@@ -404,6 +439,8 @@ void Tracker::Start(double t, const Transform& T_PO, const StartSigmas& sigmas) 
   m.evidence.clear();
   m.health.Reset(t);
   m.next_press_t = t;
+  m.detector.Reset();
+  m.events.clear();
 }
 
 void Tracker::AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -437,6 +474,17 @@ const TrackerParams& Tracker::params() const { return impl_->params; }
 const Health& Tracker::health() const { return impl_->health.health(); }
 const PressEvidence& Tracker::press_evidence() const { return impl_->health.press(); }
 
+void Tracker::TakeEvents(std::vector<TrackerEvent>& out) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  out.insert(out.end(), impl_->events.begin(), impl_->events.end());
+  impl_->events.clear();
+}
+
+void Tracker::CloseEvents() {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  impl_->detector.Close(impl_->events);
+}
+
 TrackerStats Tracker::stats() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->stats;
@@ -460,6 +508,7 @@ TrackerSnapshot Tracker::Save() const {
   s.stats = m.stats;
   s.health = m.health;
   s.next_press_t = m.next_press_t;
+  s.events = m.detector;
   if (m.history.last() >= m.history.first()) s.last = m.history.At(m.history.last());
   return s;
 }
@@ -477,6 +526,8 @@ void Tracker::Restore(const TrackerSnapshot& s) {
   m.stats = s.stats;
   m.health = s.health;
   m.next_press_t = s.next_press_t;
+  m.detector = s.events;
+  m.events.clear();
   m.evidence.clear();
   m.last_visual = s.visual;
   m.RecallLocked(s.memory, s.visual.sequence);

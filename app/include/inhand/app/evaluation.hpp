@@ -38,7 +38,16 @@ struct EstimateRecord {
   VisualMemory memory;
   Health health;        // Tracker::health() after this sample and its images
   PressEvidence press;  // Tracker::press_evidence(): the pressing finger most in the air
+  // What the tracker reported at this sample (Tracker::TakeEvents), and, against the truth, the
+  // NEES leaving its χ²₆ 99 % bound: an excursion begins when it rises beyond the bound and ends
+  // once it has stayed within it for kNeesSettle.
+  std::vector<TrackerEvent> events;
+  bool nees_beyond = false;
+  double nees_within_since = -1.0;  // [s] within the bound since (during an excursion)
 };
+
+constexpr double kNeesBound99 = 16.812;  // χ²₆ 99 %
+constexpr double kNeesSettle = 0.1;      // [s]
 
 // Fills the errors against the true pose and the NEES of the pose against its covariance P
 // (6×6, the filter's error convention p = p̂ + δp, R = Exp(δθ) R̂).

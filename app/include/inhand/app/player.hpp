@@ -55,6 +55,8 @@ class SessionPlayer {
   const std::vector<ModalitySet>& sets() const { return sets_; }
   const Tracker& tracker(std::size_t i) const { return *trackers_[i]; }
   const EstimateRecord& last(std::size_t i) const { return state_.last[i]; }
+  // Set i's bursts still open at the end of the recording (Tracker::CloseEvents), into `out`.
+  void CloseEvents(std::size_t i, std::vector<TrackerEvent>& out);
   const Session& session() const { return session_; }
   const SessionModels& models() const { return models_; }
   const TrackerParams& params() const { return params_; }
@@ -102,6 +104,8 @@ class SessionPlayer {
   std::size_t LoadFramesOf(int k);
   std::vector<Image8> images_;  // the images of the frames the current step fuses
   bool TruthCovers(double t) const;
+  // The NEES excursions beyond its bound, as events (EstimateRecord::events).
+  static void WatchNees(EstimateRecord& r);
   VisualStep no_features_;
   InputReport report_;
 };

@@ -34,6 +34,7 @@
 #include "inhand/filter/filter.hpp"
 #include "inhand/filter/health.hpp"
 #include "inhand/renderer/renderer.hpp"
+#include "inhand/tracker/events.hpp"
 #include "inhand/tracker/tracker_params.hpp"
 
 namespace inhand {
@@ -180,6 +181,7 @@ struct TrackerSnapshot {
   TrackerStats stats;
   HealthMonitor health;
   double next_press_t = 0.0;
+  EventDetector events;  // the events not taken are not in it
 };
 
 class Tracker {
@@ -228,6 +230,12 @@ class Tracker {
   const PressEvidence& press_evidence() const;
   const Modalities& modalities() const;
   const TrackerParams& params() const;
+  // What the tracker did and saw since the last call (events.hpp), appended to `out` in the order
+  // found: a burst, an image fused late or a contact (made once it has held) is found after
+  // samples later than its time. Threaded: an image's events come with the sample that adopts it.
+  void TakeEvents(std::vector<TrackerEvent>& out);
+  // Ends the bursts still open (at the end of a recording); TakeEvents then returns them.
+  void CloseEvents();
 
   TrackerSnapshot Save() const;
   // Continues from a snapshot of a tracker of the same models and parameters; the history
