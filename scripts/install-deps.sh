@@ -9,7 +9,7 @@ PACKAGES=(
   libtinyxml-dev libconsole-bridge-dev
   libopencv-dev libapriltag-dev libosmesa6-dev libimgui-dev libglfw3-dev libegl-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
-  ffmpeg xvfb xauth imagemagick clang-format
+  ffmpeg xvfb xauth xdotool imagemagick clang-format
   # The replay video: written through FFmpeg's libraries (libx264 preset), read through OpenCV.
   libavformat-dev libavcodec-dev libavutil-dev libswscale-dev
   # ROS recordings (inhand import): ROS 1 bags through Debian's rosbag_storage and message

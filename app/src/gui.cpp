@@ -20,11 +20,15 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <thread>
+#include <utility>
 
 #include "gui_gl.hpp"
+#include "inhand/app/event_overview.hpp"
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/match_pictures.hpp"
 #include "inhand/app/player.hpp"
@@ -59,6 +63,13 @@ struct GuiState {
   std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints,
       features, gated, innovation;
   bool pictures_dirty = true;
+  // The whole session's events (EventOverview), per set, and how far they are known.
+  std::vector<std::vector<TrackerEvent>> events;
+  EventOverview::Progress events_progress;
+  long events_version = -1;       // -1: copy whatever the overview has
+  bool timeline_contacts = true;  // contact events on the timeline and in [ ] jumps
+  ImGuiTextFilter event_filter;
+  double event_list_t = -1.0;  // [s] the time the event list last scrolled to
 };
 
 class Runner {
@@ -67,6 +78,9 @@ class Runner {
   void Restart() {
     player_ = std::make_unique<SessionPlayer>(session_, state_.params, state_.sets);
     composer_ = std::make_unique<FrameComposer>(*player_);
+    overview_.reset();  // stops the old one first
+    overview_ = std::make_unique<EventOverview>(session_, state_.params, player_->sets());
+    state_.events_version = -1;
     next_ = 0;
     last_frame_ = -1;
     checkpoints_.clear();
@@ -136,12 +150,14 @@ class Runner {
   int frame() const { return last_frame_; }
   const SessionPlayer& player() const { return *player_; }
   Session& session() { return session_; }
+  EventOverview& overview() { return *overview_; }
 
  private:
   Session& session_;
   GuiState& state_;
   std::unique_ptr<SessionPlayer> player_;
   std::unique_ptr<FrameComposer> composer_;
+  std::unique_ptr<EventOverview> overview_;
   int next_ = 0;
   int last_frame_ = -1;
   // Keyed by the sample the run resumes at. A checkpoint holds the last camera and virtual
@@ -412,6 +428,398 @@ void DrawFeatureMatching(const SessionPlayer& p, const Textures& tex, float avai
       m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());
 }
 
+ImU32 HealthColour(HealthState state) {
+  switch (state) {
+    case HealthState::kOk:
+      return IM_COL32(50, 130, 70, 255);
+    case HealthState::kUncertain:
+      return IM_COL32(220, 190, 50, 255);
+    case HealthState::kInconsistent:
+      return IM_COL32(240, 120, 40, 255);
+    case HealthState::kLost:
+      return IM_COL32(230, 50, 50, 255);
+  }
+  return IM_COL32(255, 255, 255, 255);
+}
+
+ImU32 EventColour(const TrackerEvent& e) {
+  switch (e.kind) {
+    case EventKind::kContactMade:
+      return IM_COL32(120, 200, 120, 255);
+    case EventKind::kContactBroken:
+      return IM_COL32(140, 140, 140, 255);
+    case EventKind::kGripLoosened:
+      return IM_COL32(240, 220, 60, 255);
+    case EventKind::kFeaturesLost:
+    case EventKind::kTagsElsewhere:
+      return IM_COL32(255, 120, 60, 255);
+    case EventKind::kFeaturesFound:
+    case EventKind::kRelocalized:
+    case EventKind::kRecovered:
+      return IM_COL32(80, 200, 255, 255);
+    case EventKind::kShiftRefused:
+      return IM_COL32(90, 130, 255, 255);
+    case EventKind::kContactsGated:
+    case EventKind::kVisionGated:
+      return IM_COL32(190, 110, 255, 255);
+    case EventKind::kHealth:
+      return HealthColour(e.health.state);
+    case EventKind::kNeesBeyondBound:
+      return IM_COL32(255, 80, 200, 255);
+    default:  // samples and images the tracker could not use, or used late
+      return IM_COL32(235, 235, 235, 255);
+  }
+}
+
+bool IsContact(const TrackerEvent& e) {
+  return e.kind == EventKind::kContactMade || e.kind == EventKind::kContactBroken;
+}
+
+// A tick step of 1, 2 or 5 times a power of ten giving at least `min_px` between ticks.
+double TickStep(double span, float width, float min_px) {
+  const double raw = span * min_px / std::max(1.0f, width);
+  const double decade = std::pow(10.0, std::floor(std::log10(std::max(raw, 1e-9))));
+  for (const double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * decade >= raw) return m * decade;
+  return 10.0 * decade;
+}
+
+// The event nearest in time to the current one, before (`dir` < 0) or after it, of every set;
+// contacts only when shown. Null when none.
+const TrackerEvent* NextEvent(const GuiState& state, double t, int dir) {
+  const TrackerEvent* best = nullptr;
+  for (const auto& set : state.events)
+    for (const TrackerEvent& e : set) {
+      if (!state.timeline_contacts && IsContact(e)) continue;
+      const bool beyond = dir < 0 ? e.t < t - 1e-6 : e.t > t + 1e-6;
+      if (beyond && (!best || (dir < 0 ? e.t > best->t : e.t < best->t))) best = &e;
+    }
+  return best;
+}
+
+// Under the picture: a time axis, one lane per set with its health as a band (green ok, yellow
+// uncertain, orange inconsistent, red lost) and a marker per event, the current time as a white
+// line. Click or drag to seek, hover a marker for its message; [ and ] jump to the previous and
+// next event. The events come from the overview, which may still be on its way.
+void DrawTimeline(Runner& runner, GuiState& state, float width) {
+  const Session& s = runner.session();
+  const SessionPlayer& p = runner.player();
+  const int n = s.num_samples();
+  const double t0 = s.t(0), t1 = std::max(s.t(n - 1), t0 + 1e-3);
+  constexpr float kLabel = 40.0f, kAxis = 16.0f, kLane = 16.0f;
+  const float height = kAxis + kLane * static_cast<float>(p.sets().size());
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  ImGui::InvisibleButton("timeline", ImVec2(width, height));
+  const bool hovered = ImGui::IsItemHovered(), active = ImGui::IsItemActive();
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  const float x0 = origin.x + kLabel, x1 = origin.x + width - 4.0f;
+  const auto x_of = [&](double t) {
+    return x0 + static_cast<float>((t - t0) / (t1 - t0)) * (x1 - x0);
+  };
+  const auto t_of = [&](float x) {
+    return std::clamp(t0 + (x - x0) / (x1 - x0) * (t1 - t0), t0, t1);
+  };
+  dl->AddRectFilled(origin, ImVec2(origin.x + width, origin.y + height), IM_COL32(22, 22, 28, 255));
+  // The time axis.
+  const double step = TickStep(t1 - t0, x1 - x0, 70.0f);
+  for (double t = std::ceil(t0 / step) * step; t <= t1 + 1e-9; t += step) {
+    const float x = x_of(t);
+    dl->AddLine(ImVec2(x, origin.y + kAxis - 4), ImVec2(x, origin.y + height),
+                IM_COL32(70, 70, 80, 255));
+    char label[32];
+    std::snprintf(label, sizeof label, "%g s", std::round(t / step) * step);
+    if (x + 2 + ImGui::CalcTextSize(label).x <= origin.x + width)
+      dl->AddText(ImVec2(x + 2, origin.y), IM_COL32(170, 170, 180, 255), label);
+  }
+  // One lane per set.
+  const ImGuiIO& io = ImGui::GetIO();
+  const TrackerEvent* under_mouse = nullptr;
+  std::size_t under_set = 0;
+  float under_dx = 5.0f;  // px: a marker this close is under the mouse
+  const double known = state.events_progress.done ? t1 : state.events_progress.t;
+  for (std::size_t i = 0; i < p.sets().size() && i < state.events.size(); ++i) {
+    const float y = origin.y + kAxis + kLane * static_cast<float>(i);
+    const Rgb& c = p.sets()[i].colour;
+    dl->AddText(ImVec2(origin.x + 4, y), IM_COL32(c.r, c.g, c.b, 255), p.sets()[i].name.c_str());
+    // The health band, from each change to the next.
+    HealthState health = HealthState::kOk;
+    double from = t0;
+    const auto band = [&](double to) {
+      dl->AddRectFilled(ImVec2(x_of(from), y + kLane - 5), ImVec2(x_of(to), y + kLane - 2),
+                        HealthColour(health));
+    };
+    for (const TrackerEvent& e : state.events[i])
+      if (e.kind == EventKind::kHealth) band(e.t), from = e.t, health = e.health.state;
+    band(known);
+    // The markers: contacts as thin ticks at the top, bursts as bars over their span, the rest as
+    // dots.
+    const float mid = y + kLane * 0.45f;
+    for (const TrackerEvent& e : state.events[i]) {
+      if (e.kind == EventKind::kHealth) continue;
+      if (!state.timeline_contacts && IsContact(e)) continue;
+      const float x = x_of(e.t);
+      const ImU32 colour = EventColour(e);
+      if (IsContact(e))
+        dl->AddLine(ImVec2(x, y + 1), ImVec2(x, y + 6), colour);
+      else if (e.duration > 0.0 && !IsContact(e))
+        dl->AddRectFilled(ImVec2(x, mid - 3),
+                          ImVec2(std::max(x + 3, x_of(e.t + e.duration)), mid + 3), colour);
+      else
+        dl->AddCircleFilled(ImVec2(x, mid), 3.5f, colour);
+      if (hovered && io.MousePos.y >= y && io.MousePos.y < y + kLane &&
+          std::abs(io.MousePos.x - x) < under_dx)
+        under_mouse = &e, under_set = i, under_dx = std::abs(io.MousePos.x - x);
+    }
+    // And each health change as a small bar of its colour.
+    for (const TrackerEvent& e : state.events[i]) {
+      if (e.kind != EventKind::kHealth) continue;
+      const float x = x_of(e.t);
+      dl->AddRectFilled(ImVec2(x - 1, y + kLane - 9), ImVec2(x + 1, y + kLane - 2),
+                        HealthColour(e.health.state));
+      if (hovered && io.MousePos.y >= y && io.MousePos.y < y + kLane &&
+          std::abs(io.MousePos.x - x) < under_dx)
+        under_mouse = &e, under_set = i, under_dx = std::abs(io.MousePos.x - x);
+    }
+  }
+  // What is not known yet.
+  if (!state.events_progress.done) {
+    dl->AddRectFilled(ImVec2(x_of(known), origin.y + kAxis),
+                      ImVec2(origin.x + width, origin.y + height), IM_COL32(0, 0, 0, 140));
+    char text[64];
+    std::snprintf(text, sizeof text, "finding events... %.0f%%", state.events_progress.share * 100);
+    dl->AddText(ImVec2(x_of(known) + 6, origin.y + kAxis + 2), IM_COL32(200, 200, 200, 255), text);
+  } else if (!state.events_progress.error.empty()) {
+    dl->AddText(ImVec2(x0, origin.y + kAxis + 2), IM_COL32(255, 100, 100, 255),
+                state.events_progress.error.c_str());
+  }
+  // The current time.
+  const float cursor = x_of(s.t(std::max(0, runner.sample())));
+  dl->AddLine(ImVec2(cursor, origin.y), ImVec2(cursor, origin.y + height),
+              IM_COL32(255, 255, 255, 255), 2.0f);
+  if (under_mouse) {
+    ImGui::BeginTooltip();
+    ImGui::Text("%.3f s  %s  %s", under_mouse->t, p.sets()[under_set].name.c_str(),
+                EventKindName(under_mouse->kind));
+    ImGui::TextUnformatted(EventMessage(*under_mouse, p.models().hand).c_str());
+    ImGui::EndTooltip();
+  }
+  // Click a marker: to its time; click or drag elsewhere: to the time under the mouse.
+  if (active && io.MousePos.x >= x0 - 2) {
+    const double t = under_mouse && ImGui::IsMouseClicked(ImGuiMouseButton_Left)
+                         ? under_mouse->t
+                         : t_of(io.MousePos.x);
+    const int k = runner.SampleAt(t);
+    if (k != runner.sample()) state.actions.push_back({ActionKind::kSeek, k});
+  }
+}
+
+// Every event of every set in time order, filtered by text; a click seeks to it.
+void DrawEventList(Runner& runner, GuiState& state, float avail) {
+  const SessionPlayer& p = runner.player();
+  state.event_filter.Draw("filter (kind, set, link, words; -word excludes)", avail * 0.5f);
+  ImGui::SameLine();
+  ImGui::Checkbox("contacts", &state.timeline_contacts);
+  struct Row {
+    const TrackerEvent* e;
+    std::size_t set;
+  };
+  std::vector<Row> rows;
+  for (std::size_t i = 0; i < state.events.size(); ++i)
+    for (const TrackerEvent& e : state.events[i])
+      if (state.timeline_contacts || !IsContact(e)) rows.push_back({&e, i});
+  std::stable_sort(rows.begin(), rows.end(),
+                   [](const Row& a, const Row& b) { return a.e->t < b.e->t; });
+  const double now = runner.session().t(std::max(0, runner.sample()));
+  ImGui::BeginChild("events", ImVec2(avail, 0), true);
+  int shown = 0;
+  bool scrolled = state.event_list_t == now;  // the list follows the current time
+  for (const Row& r : rows) {
+    char line[400];
+    std::snprintf(line, sizeof line, "%8.3f s  %-4s  %-17s %s", r.e->t,
+                  p.sets()[r.set].name.c_str(), EventKindName(r.e->kind),
+                  EventMessage(*r.e, p.models().hand).c_str());
+    if (!state.event_filter.PassFilter(line)) continue;
+    ImGui::PushID(shown++);
+    const ImU32 c = EventColour(*r.e);
+    ImGui::PushStyleColor(ImGuiCol_Text, ImGui::ColorConvertU32ToFloat4(c));
+    if (ImGui::Selectable(line, std::abs(r.e->t - now) < 1e-6))
+      state.actions.push_back({ActionKind::kSeek, runner.SampleAt(r.e->t)});
+    if (!scrolled && r.e->t >= now - 1e-6) ImGui::SetScrollHereY(0.3f), scrolled = true;
+    ImGui::PopStyleColor();
+    ImGui::PopID();
+  }
+  state.event_list_t = now;
+  if (shown == 0)
+    ImGui::TextUnformatted(state.events_progress.done ? "no events" : "finding events...");
+  ImGui::EndChild();
+}
+
+// Keys of the views (not while typing): space plays or pauses, [ and ] jump to the previous and
+// next event.
+void HandleKeys(Runner& runner, GuiState& state) {
+  const ImGuiIO& io = ImGui::GetIO();
+  if (io.WantTextInput) return;
+  const double now = runner.session().t(std::max(0, runner.sample()));
+  for (const ImWchar c : io.InputQueueCharacters) {
+    if (c == ' ') state.actions.push_back({ActionKind::kTogglePlay});
+    if (c == '[' || c == ']')
+      if (const TrackerEvent* e = NextEvent(state, now, c == '[' ? -1 : 1))
+        state.actions.push_back({ActionKind::kSeek, runner.SampleAt(e->t)});
+  }
+}
+
+// gui --script FILE: one command per line (# starts a comment), each run at a frame of its own;
+// inputs take effect by the next command:
+//   wait N                      N frames
+//   wait-events                 until the event overview has the whole session
+//   seek T                      to session time T [s]
+//   key C                       type character C (`space` for a space)
+//   click X Y                   move to window pixel (X, Y), press the left button, release it
+//   screenshot FILE             save this frame as PNG
+//   expect time T TOL           the current time is T within TOL [s]
+//   expect events KIND MIN      at least MIN events of KIND (`any`: of every kind), all sets
+class GuiScript {
+ public:
+  static GuiScript Load(const std::string& path) {
+    GuiScript script;
+    script.path_ = path;
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot read the GUI script");
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+      if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+      std::istringstream words(line);
+      Command c;
+      c.line = number;
+      if (!(words >> c.verb)) continue;
+      const auto fail = [&](const char* expected) {
+        throw InputError(path + ":" + std::to_string(number) + ": '" + line + "': expected " +
+                         expected);
+      };
+      if (c.verb == "wait") {
+        if (!(words >> c.a) || c.a < 1) fail("wait N (frames, >= 1)");
+      } else if (c.verb == "wait-events") {
+      } else if (c.verb == "seek") {
+        if (!(words >> c.a)) fail("seek T (seconds)");
+      } else if (c.verb == "key") {
+        if (!(words >> c.text) || (c.text.size() != 1 && c.text != "space"))
+          fail("key C (one character, or space)");
+      } else if (c.verb == "click") {
+        if (!(words >> c.a >> c.b)) fail("click X Y (window pixels)");
+      } else if (c.verb == "screenshot") {
+        if (!(words >> c.text)) fail("screenshot FILE");
+      } else if (c.verb == "expect") {
+        std::string what;
+        words >> what;
+        if (what == "time") {
+          c.verb = "expect-time";
+          if (!(words >> c.a >> c.b)) fail("expect time T TOL");
+        } else if (what == "events") {
+          c.verb = "expect-events";
+          if (!(words >> c.text >> c.a)) fail("expect events KIND MIN");
+          bool known = c.text == "any";
+          for (int k = 0; k < kNumEventKinds; ++k)
+            known = known || c.text == EventKindName(static_cast<EventKind>(k));
+          if (!known) fail("an event kind of FORMAT.md, or any");
+        } else {
+          fail("expect time ... or expect events ...");
+        }
+      } else {
+        fail("wait, wait-events, seek, key, click, screenshot or expect");
+      }
+      script.commands_.push_back(c);
+    }
+    return script;
+  }
+
+  bool done() const { return next_ >= commands_.size() && !pressing_ && !releasing_; }
+  int failures() const { return failures_; }
+
+  // Before ImGui::NewFrame: this frame's inputs and checks.
+  void BeforeFrame(Runner& runner, GuiState& state, ImGuiIO& io) {
+    io.MousePos = mouse_;
+    if (pressing_) {  // the frame after the move: ImGui knows what is under the mouse
+      io.MouseDown[0] = true;
+      pressing_ = false;
+      releasing_ = true;
+      return;
+    }
+    if (releasing_) {  // the frame after the press
+      io.MouseDown[0] = false;
+      releasing_ = false;
+      return;
+    }
+    if (wait_ > 0) {
+      --wait_;
+      return;
+    }
+    while (next_ < commands_.size()) {
+      const Command& c = commands_[next_++];
+      const std::string where = path_ + ":" + std::to_string(c.line) + ": ";
+      if (c.verb == "screenshot") {
+        screenshot_ = c.text;
+        continue;
+      }
+      if (c.verb == "wait-events" || c.verb == "expect-events") {
+        runner.overview().Wait();
+        state.events_version =
+            runner.overview().Read(state.events_version, state.events, state.events_progress);
+      }
+      if (c.verb == "expect-time") {
+        const double t = runner.session().t(std::max(0, runner.sample()));
+        Report(where, std::abs(t - c.a) <= c.b,
+               "time " + FormatDouble(t) + " s, expected " + FormatDouble(c.a) + " +- " +
+                   FormatDouble(c.b));
+        continue;
+      }
+      if (c.verb == "expect-events") {
+        long count = 0;
+        for (const auto& set : state.events)
+          for (const TrackerEvent& e : set)
+            count += c.text == "any" || c.text == EventKindName(e.kind);
+        Report(where, count >= c.a,
+               std::to_string(count) + " events of " + c.text + ", expected at least " +
+                   FormatDouble(c.a));
+        continue;
+      }
+      if (c.verb == "wait-events") continue;
+      if (c.verb == "wait") {
+        wait_ = static_cast<int>(c.a) - 1;
+      } else if (c.verb == "seek") {
+        state.actions.push_back({ActionKind::kSeek, runner.SampleAt(c.a)});
+      } else if (c.verb == "key") {
+        io.AddInputCharacter(c.text == "space" ? ' ' : static_cast<unsigned>(c.text[0]));
+      } else if (c.verb == "click") {
+        mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
+        io.MousePos = mouse_;
+        pressing_ = true;
+      }
+      return;  // one input per frame
+    }
+  }
+  // After the frame is drawn: where to save it ("" : nowhere).
+  std::string TakeScreenshot() { return std::exchange(screenshot_, std::string()); }
+
+ private:
+  struct Command {
+    int line = 0;
+    std::string verb, text;
+    double a = 0.0, b = 0.0;
+  };
+  void Report(const std::string& where, bool ok, const std::string& what) {
+    std::cout << where << (ok ? "ok: " : "FAILED: ") << what << "\n";
+    failures_ += !ok;
+  }
+  std::string path_;
+  std::vector<Command> commands_;
+  std::size_t next_ = 0;
+  int wait_ = 0;
+  bool pressing_ = false, releasing_ = false;
+  ImVec2 mouse_{-1.0f, -1.0f};
+  std::string screenshot_;
+  int failures_ = 0;
+};
+
 // The right: the composed picture (orbit and zoom of its 3-D view by mouse) above the tabs.
 void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
   const SessionPlayer& p = runner.player();
@@ -443,6 +851,7 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
       state.pictures_dirty = true;
     }
   }
+  DrawTimeline(runner, state, avail);
   if (ImGui::BeginTabBar("tabs")) {
     if (ImGui::BeginTabItem("Errors and uncertainty")) {
       DrawErrorPlots(p, state, avail);
@@ -456,17 +865,25 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
       DrawFeatureMatching(p, tex, avail);
       ImGui::EndTabItem();
     }
+    if (ImGui::BeginTabItem("Events")) {
+      DrawEventList(runner, state, avail);
+      ImGui::EndTabItem();
+    }
     ImGui::EndTabBar();
   }
   ImGui::End();
 }
 
 void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
+  state.events_version =
+      runner.overview().Read(state.events_version, state.events, state.events_progress);
+  HandleKeys(runner, state);
   DrawControlPanel(runner, state, height);
   DrawViews(runner, state, tex, width, height);
 }
 
-int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, GuiState& state) {
+int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, GuiState& state,
+                GuiScript* script) {
   OSMesaContext ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
   if (!ctx) throw std::runtime_error("gui: cannot create an offscreen OpenGL context");
   std::vector<std::uint8_t> buffer(static_cast<std::size_t>(cmd.width) * cmd.height * 4);
@@ -479,14 +896,28 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
   ImGui::StyleColorsDark();
   ImGui_ImplOpenGL2_Init();
   Textures tex;
-  const int frames = cmd.frames > 0 ? cmd.frames : 1;
-  for (int f = 0; f < frames; ++f) {
+  const int frames = script ? std::numeric_limits<int>::max() : cmd.frames > 0 ? cmd.frames : 1;
+  if (!script) runner.overview().Wait();  // the screenshot shows every event
+  // OSMesa's buffer holds the last frame, bottom row first.
+  const auto picture = [&] {
+    Image8 img(cmd.width, cmd.height, 3);
+    for (int y = 0; y < cmd.height; ++y)
+      for (int x = 0; x < cmd.width; ++x)
+        for (int c = 0; c < 3; ++c)
+          img.pixel(x, y)[c] =
+              buffer[(static_cast<std::size_t>(cmd.height - 1 - y) * cmd.width + x) * 4 +
+                     static_cast<std::size_t>(c)];
+    return img;
+  };
+  int f = 0;
+  for (; f < frames && !(script && script->done()); ++f) {
     render.Run([&] { ApplyActions(runner, state); });
     UpdateTextures(gl, render, runner, state, tex);
     ImGuiIO& io = ImGui::GetIO();
     io.DisplaySize = ImVec2(static_cast<float>(cmd.width), static_cast<float>(cmd.height));
     io.DeltaTime = 1.0f / 30.0f;
     ImGui_ImplOpenGL2_NewFrame();
+    if (script) script->BeforeFrame(runner, state, io);
     ImGui::NewFrame();
     DrawUi(runner, state, tex, cmd.width, cmd.height);
     ImGui::Render();
@@ -495,22 +926,19 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
     gl.Clear(GL_COLOR_BUFFER_BIT);
     ImGui_ImplOpenGL2_RenderDrawData(ImGui::GetDrawData());
     gl.Finish();
+    if (script)
+      if (const std::string file = script->TakeScreenshot(); !file.empty())
+        WriteImage(file, picture());
   }
-  // OSMesa's buffer holds the last frame, bottom row first.
-  Image8 img(cmd.width, cmd.height, 3);
-  for (int y = 0; y < cmd.height; ++y)
-    for (int x = 0; x < cmd.width; ++x)
-      for (int c = 0; c < 3; ++c)
-        img.pixel(x, y)[c] =
-            buffer[(static_cast<std::size_t>(cmd.height - 1 - y) * cmd.width + x) * 4 +
-                   static_cast<std::size_t>(c)];
-  WriteImage(cmd.screenshot, img);
+  if (!cmd.screenshot.empty()) WriteImage(cmd.screenshot, picture());
   ImGui_ImplOpenGL2_Shutdown();
   ImGui::DestroyContext();
   OSMesaDestroyContext(ctx);
-  std::cout << "offscreen interface (no display): " << frames << " frames, screenshot "
-            << cmd.screenshot << "\n";
-  return 0;
+  std::cout << "offscreen interface (no display): " << f << " frames, t "
+            << runner.session().t(std::max(0, runner.sample())) << " s";
+  if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;
+  std::cout << "\n";
+  return script && script->failures() > 0 ? 1 : 0;
 }
 
 }  // namespace
@@ -528,18 +956,20 @@ int RunGui(const GuiCommand& cmd) {
     state.actions.push_back({ActionKind::kSeek, k});
   }
   state.playing = cmd.play;
+  std::unique_ptr<GuiScript> script;
+  if (!cmd.script.empty()) script = std::make_unique<GuiScript>(GuiScript::Load(cmd.script));
   const char* display = std::getenv("DISPLAY");
   const bool have_display = display && *display && glfwInit();
   if (!have_display) {
-    if (cmd.screenshot.empty()) {
+    if (cmd.screenshot.empty() && !script) {
       std::cerr << "inhand: error: no display for the interactive session (set DISPLAY, or use "
-                   "--screenshot FILE to render it offscreen)\n";
+                   "--screenshot FILE or --script FILE to render it offscreen)\n";
       return 2;
     }
     RenderThread render;
     std::unique_ptr<Runner> runner;
     render.Run([&] { runner = std::make_unique<Runner>(session, state); });
-    const int code = RunHeadless(cmd, render, *runner, state);
+    const int code = RunHeadless(cmd, render, *runner, state, script.get());
     render.Run([&] { runner.reset(); });
     return code;
   }
@@ -570,7 +1000,8 @@ int RunGui(const GuiCommand& cmd) {
   int frames = 0;
   std::vector<double> frame_ms;
   auto last = std::chrono::steady_clock::now();
-  while (!glfwWindowShouldClose(window) && (cmd.frames < 0 || frames < cmd.frames)) {
+  while (!glfwWindowShouldClose(window) &&
+         (script ? !script->done() : cmd.frames < 0 || frames < cmd.frames)) {
     const auto now = std::chrono::steady_clock::now();
     if (frames > 0)
       frame_ms.push_back(std::chrono::duration<double, std::milli>(now - last).count());
@@ -580,6 +1011,7 @@ int RunGui(const GuiCommand& cmd) {
     UpdateTextures(gl, render, runner, state, tex);
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
+    if (script) script->BeforeFrame(runner, state, ImGui::GetIO());
     ImGui::NewFrame();
     int w = 0, h = 0;
     glfwGetFramebufferSize(window, &w, &h);
@@ -590,10 +1022,16 @@ int RunGui(const GuiCommand& cmd) {
     gl.Clear(GL_COLOR_BUFFER_BIT);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     ++frames;
-    if (!cmd.screenshot.empty() && cmd.frames > 0 && frames == cmd.frames) {
+    const bool final_frame = script ? script->done() : cmd.frames > 0 && frames == cmd.frames;
+    if (!cmd.screenshot.empty() && final_frame) {
       gl.ReadBuffer(GL_BACK);
       SaveScreenshot(gl, w, h, cmd.screenshot);
     }
+    if (script)
+      if (const std::string file = script->TakeScreenshot(); !file.empty()) {
+        gl.ReadBuffer(GL_BACK);
+        SaveScreenshot(gl, w, h, file);
+      }
     glfwSwapBuffers(window);
   }
   render.Run([&] { runner_owner.reset(); });
@@ -610,7 +1048,7 @@ int RunGui(const GuiCommand& cmd) {
             << " ms";
   if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;
   std::cout << "\n";
-  return 0;
+  return script && script->failures() > 0 ? 1 : 0;
 }
 
 }  // namespace inhand::app

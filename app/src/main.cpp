@@ -196,6 +196,9 @@ int main(int argc, char** argv) {
   gui_cmd->add_option("--screenshot", gui.screenshot, "save the last frame as PNG");
   gui_cmd->add_option("--time", gui.time, "start at this session time [s]");
   gui_cmd->add_flag("--play", gui.play, "start playing");
+  gui_cmd->add_option("--script", gui.script,
+                      "run FILE's inputs and checks (seek, key, click, wait, screenshot, expect), "
+                      "then quit; exit 1 when a check fails");
 
   try {
     cli.parse(argc, argv);

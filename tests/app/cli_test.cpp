@@ -731,5 +731,68 @@ TEST(Gui, RealWindowUnderXvfb) {
   ExpectInterface(ReadImage(dir / "gui.png"));
 }
 
+// The timeline under the views (issue 37): a script (gui --script) waits for the whole session's
+// events, seeks, clicks the jt lane at 3.5 s (the timeline spans the window's width beside the
+// 330-px panel: 1 s at x 378, 6 s at x 1268) and jumps with ] and [ from event to event; the
+// times it reaches are those of replay's events.csv. Offscreen, and in a real window under Xvfb
+// when there is one. A failed check exits 1 naming the line; a malformed script exits 2.
+TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
+  INHAND_REQUIRE_GUI();
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "replay"))
+                .exit_code,
+            0);
+  std::vector<double> times;
+  for (const EventRow& e : ReadEvents(dir / "replay/events.csv")) times.push_back(e.t);
+  const auto after = [&](double t) {
+    double best = INFINITY;
+    for (double v : times)
+      if (v > t + 1e-6) best = std::min(best, v);
+    return best;
+  };
+  const double t3 = 3.0;  // a sample's time: seeking there lands on it
+  const double first = after(t3), second = after(first);
+  ASSERT_LT(second, 6.0);
+  char script[1024];
+  std::snprintf(script, sizeof script,
+                "wait-events\n"
+                "expect events any %zu\n"
+                "expect events contact_made 4\n"
+                "seek 2.0\nwait 2\nexpect time 2.0 0.001\n"
+                "click 823 300   # the jt lane, 3.5 s\nwait 2\nexpect time 3.5 0.03\n"
+                "seek %.17g\nwait 2\nkey ]\nwait 2\nexpect time %.17g 1e-9\n"
+                "key ]\nwait 2\nexpect time %.17g 1e-9\n"
+                "key [\nwait 2\nexpect time %.17g 1e-9\n"
+                "screenshot %s\n",
+                times.size(), t3, first, second, first, (dir / "timeline.png").c_str());
+  std::ofstream(dir / "timeline.script") << script;
+  std::vector<std::string> runners = {"env -u DISPLAY"};
+  if (std::system("command -v xvfb-run > /dev/null 2>&1") == 0)
+    runners.push_back("xvfb-run -a -s '-screen 0 1280x800x24'");
+  for (const std::string& runner : runners) {
+    SCOPED_TRACE(runner);
+    std::filesystem::remove(dir / "timeline.png");
+    const test::CommandResult r =
+        test::RunInhand("gui " + ShortSession() + " --script " + (dir / "timeline.script"), runner);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("FAILED"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("timeline.script:20: ok"), std::string::npos) << r.output;
+    ExpectInterface(ReadImage(dir / "timeline.png"));
+  }
+  // A check that fails says where, and exits 1; a script that cannot be read exits 2.
+  std::ofstream(dir / "bad.script") << "wait 1\nexpect time 0.5 0.001\n";
+  const test::CommandResult failed = test::RunInhand(
+      "gui " + ShortSession() + " --script " + (dir / "bad.script"), "env -u DISPLAY");
+  EXPECT_EQ(failed.exit_code, 1) << failed.output;
+  EXPECT_NE(failed.output.find("bad.script:2: FAILED: time"), std::string::npos) << failed.output;
+  std::ofstream(dir / "malformed.script") << "wait 1\nclick here\n";
+  const test::CommandResult malformed = test::RunInhand(
+      "gui " + ShortSession() + " --script " + (dir / "malformed.script"), "env -u DISPLAY");
+  EXPECT_EQ(malformed.exit_code, 2) << malformed.output;
+  EXPECT_NE(malformed.output.find("malformed.script:2: 'click here': expected click X Y"),
+            std::string::npos)
+      << malformed.output;
+}
+
 }  // namespace
 }  // namespace inhand

@@ -1,7 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
 
+#include "inhand/app/event_overview.hpp"
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
@@ -52,6 +58,60 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
     EXPECT_EQ(first_P[i], player.tracker(i).covariance());
   // The stretch replayed must hold camera frames, or the test would not cover the visual step.
   EXPECT_GE(frames, 8);
+}
+
+// The GUI's timeline reads the whole session's events from an overview replayed on a thread of its
+// own: they are replay's events.csv, event for event (time, kind, subject, value) and set for set;
+// a second read with the version it returned copies nothing.
+TEST(EventOverview, FindsTheEventsReplayWrites) {
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
+  ASSERT_EQ(test::RunInhand("replay " + (dir / "session") +
+                            " --no-video --modalities jt,jtf --out " + (dir / "replay"))
+                .exit_code,
+            0);
+  Session session = Session::Load(dir / "session");
+  const std::vector<app::ModalitySet> sets = app::ParseModalities("jt,jtf");
+  app::EventOverview overview(session, TrackerParams(), sets);
+  overview.Wait();
+  std::vector<std::vector<TrackerEvent>> events;
+  app::EventOverview::Progress progress;
+  const long version = overview.Read(0, events, progress);
+  EXPECT_GT(version, 0);
+  EXPECT_TRUE(progress.done);
+  EXPECT_EQ(progress.error, "");
+  EXPECT_DOUBLE_EQ(progress.share, 1.0);
+  EXPECT_DOUBLE_EQ(progress.t, session.t(session.num_samples() - 1));
+  ASSERT_EQ(events.size(), 2u);
+  std::vector<std::vector<TrackerEvent>> untouched = {{TrackerEvent()}};
+  EXPECT_EQ(overview.Read(version, untouched, progress), version);
+  EXPECT_EQ(untouched.size(), 1u);
+  // events.csv: per set, in time order (the overview's are in the order found).
+  std::map<std::string, std::vector<std::string>> csv;
+  std::ifstream in(dir / "replay/events.csv");
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string t, set, kind, subject, value;
+    std::getline(ss, t, ','), std::getline(ss, set, ','), std::getline(ss, kind, ',');
+    std::getline(ss, subject, ','), std::getline(ss, value, ',');
+    csv[set].push_back(t + " " + kind + " " + subject + " " + value);
+  }
+  const SessionModels models = LoadSessionModels(session, false);
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    std::stable_sort(events[i].begin(), events[i].end(),
+                     [](const TrackerEvent& a, const TrackerEvent& b) { return a.t < b.t; });
+    std::vector<std::string> found;
+    for (const TrackerEvent& e : events[i])
+      found.push_back(FormatDouble(e.t) + " " + EventKindName(e.kind) + " " +
+                      EventSubject(e, models.hand) + " " + FormatDouble(e.value));
+    EXPECT_GE(found.size(), 6u) << sets[i].name;
+    EXPECT_EQ(found, csv[sets[i].name]) << sets[i].name;
+  }
 }
 
 // At a camera frame the tag set reports its innovation (it was never set for jta), and a

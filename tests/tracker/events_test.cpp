@@ -78,7 +78,7 @@ TEST(EventDetector, AContactCountsOnceItHasHeldAndIsStampedWithItsFirstSample) {
   ASSERT_EQ(out.size(), 3u);
   EXPECT_EQ(out[2].count, 0);
   EXPECT_DOUBLE_EQ(out[2].value, 0.002);
-  EXPECT_EQ(EventMessage(out[2], hand), "thumb_tip touches the object (kinematic, 2.0 mm deep)");
+  EXPECT_EQ(EventMessage(out[2], hand), "thumb_tip touches the object (kinematic, 2.00 mm deep)");
   // Candidates and gated contacts are not contacts.
   out.clear();
   d.Reset();

@@ -87,7 +87,7 @@ std::string EventMessage(const TrackerEvent& e, const HandModel& hand) {
         std::snprintf(line, sizeof line, "%s touches the object (torque-confirmed, %.2f N)",
                       subject.c_str(), e.value);
       else
-        std::snprintf(line, sizeof line, "%s touches the object (kinematic, %.1f mm deep)",
+        std::snprintf(line, sizeof line, "%s touches the object (kinematic, %.2f mm deep)",
                       subject.c_str(), e.value * 1000);
       break;
     case EventKind::kContactBroken:

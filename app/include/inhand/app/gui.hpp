@@ -15,6 +15,9 @@ struct GuiCommand {
   std::string screenshot;  // save the last frame as PNG
   double time = -1.0;      // start at this session time [s] (-1: the beginning)
   bool play = false;       // start playing
+  // A script of inputs and checks run in the window, one command per frame or more (RunGui):
+  // the session ends with it, exit 1 when a check failed.
+  std::string script;
   int width = 1280, height = 800;
 };
 int RunGui(const GuiCommand& cmd);
