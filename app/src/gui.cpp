@@ -28,10 +28,10 @@
 #include <utility>
 
 #include "gui_gl.hpp"
-#include "inhand/app/event_overview.hpp"
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/match_pictures.hpp"
 #include "inhand/app/player.hpp"
+#include "inhand/app/session_overview.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/sessions/image_io.hpp"
 
@@ -59,28 +59,35 @@ struct GuiState {
   char params_path[512] = "params.json";
   std::deque<Action> actions;
   std::string status;
-  // Histories over samples, per modality set.
-  std::vector<std::vector<float>> position_error, orientation_error, sigma_position, constraints,
-      features, gated, innovation;
+  // Histories over the samples stepped so far, per modality set (the counts tab; the error
+  // plots read the overview).
+  std::vector<std::vector<float>> constraints, gated, innovation;
   bool pictures_dirty = true;
-  // The whole session's events (EventOverview), per set, and how far they are known.
-  std::vector<std::vector<TrackerEvent>> events;
-  EventOverview::Progress events_progress;
-  long events_version = -1;       // -1: copy whatever the overview has
+  // The whole session's events and series (SessionOverview), and how far they are known.
+  SessionOverview::Data overview;
+  long overview_version = -1;     // -1: copy whatever the overview has
   bool timeline_contacts = true;  // contact events on the timeline and in [ ] jumps
   ImGuiTextFilter event_filter;
   double event_list_t = -1.0;  // [s] the time the event list last scrolled to
+  // The time window the timeline and the plots share [s] (NaN: the whole session).
+  double view_t0 = NAN, view_t1 = NAN;
 };
 
 class Runner {
  public:
-  Runner(Session& session, GuiState& state) : session_(session), state_(state) { Restart(); }
+  Runner(Session& session, GuiState& state) : session_(session), state_(state) {
+    Restart();
+    RestartOverview();
+  }
+  // The whole session again, with the current parameters (after they changed).
+  void RestartOverview() {
+    overview_.reset();  // stops the old one first
+    overview_ = std::make_unique<SessionOverview>(session_, state_.params, player_->sets());
+    state_.overview_version = -1;
+  }
   void Restart() {
     player_ = std::make_unique<SessionPlayer>(session_, state_.params, state_.sets);
     composer_ = std::make_unique<FrameComposer>(*player_);
-    overview_.reset();  // stops the old one first
-    overview_ = std::make_unique<EventOverview>(session_, state_.params, player_->sets());
-    state_.events_version = -1;
     next_ = 0;
     last_frame_ = -1;
     checkpoints_.clear();
@@ -111,11 +118,7 @@ class Runner {
       player_->Step(next_);
       for (std::size_t i = 0; i < player_->sets().size(); ++i) {
         const EstimateRecord& r = player_->last(i);
-        state_.position_error[i].push_back(static_cast<float>(r.position_error * 1000));
-        state_.orientation_error[i].push_back(static_cast<float>(r.orientation_error * 180 / M_PI));
-        state_.sigma_position[i].push_back(static_cast<float>(r.sigma_position.norm() * 1000));
         state_.constraints[i].push_back(static_cast<float>(r.constraints));
-        state_.features[i].push_back(static_cast<float>(r.visual_used));
         state_.gated[i].push_back(static_cast<float>(r.gated));
         state_.innovation[i].push_back(static_cast<float>(r.visual_mahalanobis));
       }
@@ -150,14 +153,14 @@ class Runner {
   int frame() const { return last_frame_; }
   const SessionPlayer& player() const { return *player_; }
   Session& session() { return session_; }
-  EventOverview& overview() { return *overview_; }
+  SessionOverview& overview() { return *overview_; }
 
  private:
   Session& session_;
   GuiState& state_;
   std::unique_ptr<SessionPlayer> player_;
   std::unique_ptr<FrameComposer> composer_;
-  std::unique_ptr<EventOverview> overview_;
+  std::unique_ptr<SessionOverview> overview_;
   int next_ = 0;
   int last_frame_ = -1;
   // Keyed by the sample the run resumes at. A checkpoint holds the last camera and virtual
@@ -169,10 +172,8 @@ class Runner {
   };
   std::map<int, RunnerCheckpoint> checkpoints_;
   // Every per-sample history of the plots (one series per modality set).
-  std::array<std::vector<std::vector<float>>*, 7> Histories() {
-    return {&state_.position_error, &state_.orientation_error, &state_.sigma_position,
-            &state_.constraints,    &state_.features,          &state_.gated,
-            &state_.innovation};
+  std::array<std::vector<std::vector<float>>*, 3> Histories() {
+    return {&state_.constraints, &state_.gated, &state_.innovation};
   }
 };
 
@@ -220,6 +221,7 @@ void ApplyActions(Runner& runner, GuiState& state) {
           state.params.Validate("GUI parameters");
           const int at = runner.sample();
           runner.Restart();
+          runner.RestartOverview();
           runner.StepTo(at);
           state.status = "recomputed with the new parameters";
         } catch (const InputError& e) {
@@ -320,47 +322,6 @@ void DrawControlPanel(Runner& runner, GuiState& state, int height) {
   if (!state.status.empty()) ImGui::TextWrapped("%s", state.status.c_str());
   ImGui::PopItemWidth();
   ImGui::End();
-}
-
-// One row per estimate set: position error, orientation error, position sigma over time.
-void DrawErrorPlots(const SessionPlayer& p, const GuiState& state, float avail) {
-  for (std::size_t i = 0; i < p.sets().size(); ++i) {
-    const Rgb& c = p.sets()[i].colour;
-    ImGui::PushStyleColor(ImGuiCol_PlotLines, ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f));
-    const auto& pe = state.position_error[i];
-    const auto& oe = state.orientation_error[i];
-    const auto& sp = state.sigma_position[i];
-    // Labels go inside the plots (overlay text) so three columns fit any window width.
-    const float w = (avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
-    char id[48], text[96];
-    std::snprintf(id, sizeof(id), "##pos%zu", i);
-    const bool truth = p.session().has_groundtruth();
-    if (truth)
-      std::snprintf(text, sizeof(text), "%s position error %.1f mm", p.sets()[i].name.c_str(),
-                    pe.empty() ? 0.f : pe.back());
-    else
-      std::snprintf(text, sizeof(text), "%s: no ground truth", p.sets()[i].name.c_str());
-    ImGui::PlotLines(id, pe.data(), static_cast<int>(pe.size()), 0, text, 0.0f, FLT_MAX,
-                     ImVec2(w, 48));
-    ImGui::SameLine();
-    std::snprintf(id, sizeof(id), "##ori%zu", i);
-    if (truth)
-      std::snprintf(text, sizeof(text), "orientation error %.1f deg", oe.empty() ? 0.f : oe.back());
-    else
-      std::snprintf(text, sizeof(text), "(no ground truth)");
-    ImGui::PlotLines(id, oe.data(), static_cast<int>(oe.size()), 0, text, 0.0f, FLT_MAX,
-                     ImVec2(w, 48));
-    ImGui::SameLine();
-    std::snprintf(id, sizeof(id), "##sig%zu", i);
-    const EstimateRecord& last = p.last(i);
-    std::snprintf(text, sizeof(text), "sigma x/y/z %.1f/%.1f/%.1f mm\n%.1f/%.1f/%.1f deg",
-                  last.sigma_position.x() * 1000, last.sigma_position.y() * 1000,
-                  last.sigma_position.z() * 1000, last.sigma_orientation.x() * 180 / M_PI,
-                  last.sigma_orientation.y() * 180 / M_PI, last.sigma_orientation.z() * 180 / M_PI);
-    ImGui::PlotLines(id, sp.data(), static_cast<int>(sp.size()), 0, text, 0.0f, FLT_MAX,
-                     ImVec2(w, 48));
-    ImGui::PopStyleColor();
-  }
 }
 
 // One row per estimate set: joint biases, constraints, gated features, visual innovation.
@@ -488,13 +449,45 @@ double TickStep(double span, float width, float min_px) {
 // contacts only when shown. Null when none.
 const TrackerEvent* NextEvent(const GuiState& state, double t, int dir) {
   const TrackerEvent* best = nullptr;
-  for (const auto& set : state.events)
-    for (const TrackerEvent& e : set) {
+  for (const auto& set : state.overview.sets)
+    for (const TrackerEvent& e : set.events) {
       if (!state.timeline_contacts && IsContact(e)) continue;
       const bool beyond = dir < 0 ? e.t < t - 1e-6 : e.t > t + 1e-6;
       if (beyond && (!best || (dir < 0 ? e.t > best->t : e.t < best->t))) best = &e;
     }
   return best;
+}
+
+// The time window the timeline and the plots show: the whole session unless zoomed.
+std::pair<double, double> TimeWindow(const Session& s, const GuiState& state) {
+  const double t0 = s.t(0), t1 = std::max(s.t(s.num_samples() - 1), t0 + 1e-3);
+  if (!(state.view_t0 < state.view_t1)) return {t0, t1};
+  return {std::max(t0, state.view_t0), std::min(t1, state.view_t1)};
+}
+
+// Over the timeline or a plot (its time axis from x0 to x1 px): the wheel zooms the shared window
+// about the time under the mouse, a right drag pans it, a double click shows the whole session.
+void ZoomAndPan(const Session& s, GuiState& state, float x0, float x1) {
+  const ImGuiIO& io = ImGui::GetIO();
+  const auto [w0, w1] = TimeWindow(s, state);
+  const double t0 = s.t(0), t1 = std::max(s.t(s.num_samples() - 1), t0 + 1e-3);
+  const double per_px = (w1 - w0) / std::max(1.0f, x1 - x0);
+  double a = w0, b = w1;
+  if (io.MouseWheel != 0.0f) {
+    const double at = w0 + (io.MousePos.x - x0) * per_px;
+    const double scale = std::pow(0.8, io.MouseWheel);
+    a = at - (at - w0) * scale, b = at + (w1 - at) * scale;
+  }
+  if (ImGui::IsMouseDragging(ImGuiMouseButton_Right)) {
+    const double shift = -io.MouseDelta.x * per_px;
+    a += shift, b += shift;
+  }
+  if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) a = t0, b = t1;
+  if (a == w0 && b == w1) return;
+  const double span = std::clamp(b - a, 0.01, t1 - t0);  // 10 ms at the most zoomed
+  if (a < t0) a = t0;
+  if (a + span > t1) a = t1 - span;
+  state.view_t0 = a, state.view_t1 = a + span;
 }
 
 // Under the picture: a time axis, one lane per set with its health as a band (green ok, yellow
@@ -504,8 +497,8 @@ const TrackerEvent* NextEvent(const GuiState& state, double t, int dir) {
 void DrawTimeline(Runner& runner, GuiState& state, float width) {
   const Session& s = runner.session();
   const SessionPlayer& p = runner.player();
-  const int n = s.num_samples();
-  const double t0 = s.t(0), t1 = std::max(s.t(n - 1), t0 + 1e-3);
+  const auto [t0, t1] = TimeWindow(s, state);
+  const double session_end = s.t(s.num_samples() - 1);
   constexpr float kLabel = 40.0f, kAxis = 16.0f, kLane = 16.0f;
   const float height = kAxis + kLane * static_cast<float>(p.sets().size());
   const ImVec2 origin = ImGui::GetCursorScreenPos();
@@ -520,9 +513,11 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
     return std::clamp(t0 + (x - x0) / (x1 - x0) * (t1 - t0), t0, t1);
   };
   dl->AddRectFilled(origin, ImVec2(origin.x + width, origin.y + height), IM_COL32(22, 22, 28, 255));
+  if (hovered) ZoomAndPan(s, state, x0, x1);
+  dl->PushClipRect(origin, ImVec2(origin.x + width, origin.y + height), true);
   // The time axis.
   const double step = TickStep(t1 - t0, x1 - x0, 70.0f);
-  for (double t = std::ceil(t0 / step) * step; t <= t1 + 1e-9; t += step) {
+  for (double t = std::ceil(t0 / step - 1e-9) * step; t <= t1 + 1e-9; t += step) {
     const float x = x_of(t);
     dl->AddLine(ImVec2(x, origin.y + kAxis - 4), ImVec2(x, origin.y + height),
                 IM_COL32(70, 70, 80, 255));
@@ -536,8 +531,8 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
   const TrackerEvent* under_mouse = nullptr;
   std::size_t under_set = 0;
   float under_dx = 5.0f;  // px: a marker this close is under the mouse
-  const double known = state.events_progress.done ? t1 : state.events_progress.t;
-  for (std::size_t i = 0; i < p.sets().size() && i < state.events.size(); ++i) {
+  const double known = state.overview.progress.done ? session_end : state.overview.progress.t;
+  for (std::size_t i = 0; i < p.sets().size() && i < state.overview.sets.size(); ++i) {
     const float y = origin.y + kAxis + kLane * static_cast<float>(i);
     const Rgb& c = p.sets()[i].colour;
     dl->AddText(ImVec2(origin.x + 4, y), IM_COL32(c.r, c.g, c.b, 255), p.sets()[i].name.c_str());
@@ -545,19 +540,21 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
     HealthState health = HealthState::kOk;
     double from = t0;
     const auto band = [&](double to) {
-      dl->AddRectFilled(ImVec2(x_of(from), y + kLane - 5), ImVec2(x_of(to), y + kLane - 2),
-                        HealthColour(health));
+      const float a = std::max(x_of(from), x0), b = std::min(x_of(to), x1);
+      if (a < b)
+        dl->AddRectFilled(ImVec2(a, y + kLane - 5), ImVec2(b, y + kLane - 2), HealthColour(health));
     };
-    for (const TrackerEvent& e : state.events[i])
+    for (const TrackerEvent& e : state.overview.sets[i].events)
       if (e.kind == EventKind::kHealth) band(e.t), from = e.t, health = e.health.state;
     band(known);
     // The markers: contacts as thin ticks at the top, bursts as bars over their span, the rest as
     // dots.
     const float mid = y + kLane * 0.45f;
-    for (const TrackerEvent& e : state.events[i]) {
+    for (const TrackerEvent& e : state.overview.sets[i].events) {
       if (e.kind == EventKind::kHealth) continue;
       if (!state.timeline_contacts && IsContact(e)) continue;
       const float x = x_of(e.t);
+      if (x < x0 - 3 || x > x1 + 3) continue;  // outside the window
       const ImU32 colour = EventColour(e);
       if (IsContact(e))
         dl->AddLine(ImVec2(x, y + 1), ImVec2(x, y + 6), colour);
@@ -571,9 +568,10 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
         under_mouse = &e, under_set = i, under_dx = std::abs(io.MousePos.x - x);
     }
     // And each health change as a small bar of its colour.
-    for (const TrackerEvent& e : state.events[i]) {
+    for (const TrackerEvent& e : state.overview.sets[i].events) {
       if (e.kind != EventKind::kHealth) continue;
       const float x = x_of(e.t);
+      if (x < x0 - 3 || x > x1 + 3) continue;
       dl->AddRectFilled(ImVec2(x - 1, y + kLane - 9), ImVec2(x + 1, y + kLane - 2),
                         HealthColour(e.health.state));
       if (hovered && io.MousePos.y >= y && io.MousePos.y < y + kLane &&
@@ -582,20 +580,24 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
     }
   }
   // What is not known yet.
-  if (!state.events_progress.done) {
-    dl->AddRectFilled(ImVec2(x_of(known), origin.y + kAxis),
-                      ImVec2(origin.x + width, origin.y + height), IM_COL32(0, 0, 0, 140));
+  if (!state.overview.progress.done && x_of(known) < x1) {
+    const float from = std::max(x_of(known), x0);
+    dl->AddRectFilled(ImVec2(from, origin.y + kAxis), ImVec2(origin.x + width, origin.y + height),
+                      IM_COL32(0, 0, 0, 140));
     char text[64];
-    std::snprintf(text, sizeof text, "finding events... %.0f%%", state.events_progress.share * 100);
-    dl->AddText(ImVec2(x_of(known) + 6, origin.y + kAxis + 2), IM_COL32(200, 200, 200, 255), text);
-  } else if (!state.events_progress.error.empty()) {
+    std::snprintf(text, sizeof text, "finding events... %.0f%%",
+                  state.overview.progress.share * 100);
+    dl->AddText(ImVec2(from + 6, origin.y + kAxis + 2), IM_COL32(200, 200, 200, 255), text);
+  } else if (!state.overview.progress.error.empty()) {
     dl->AddText(ImVec2(x0, origin.y + kAxis + 2), IM_COL32(255, 100, 100, 255),
-                state.events_progress.error.c_str());
+                state.overview.progress.error.c_str());
   }
   // The current time.
   const float cursor = x_of(s.t(std::max(0, runner.sample())));
-  dl->AddLine(ImVec2(cursor, origin.y), ImVec2(cursor, origin.y + height),
-              IM_COL32(255, 255, 255, 255), 2.0f);
+  if (cursor >= x0 - 1 && cursor <= x1 + 1)
+    dl->AddLine(ImVec2(cursor, origin.y), ImVec2(cursor, origin.y + height),
+                IM_COL32(255, 255, 255, 255), 2.0f);
+  dl->PopClipRect();
   if (under_mouse) {
     ImGui::BeginTooltip();
     ImGui::Text("%.3f s  %s  %s", under_mouse->t, p.sets()[under_set].name.c_str(),
@@ -613,6 +615,208 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
   }
 }
 
+// One quantity of every set over the shared time window, from the overview: value and time axes
+// with ticks and labels, the unit, a legend in the sets' colours, an optional band (NEES's χ²
+// interval) and threshold line, the current time, a read-out of every set under the mouse; click
+// to seek, wheel and right drag to zoom and pan (ZoomAndPan). `cap`: values above it are drawn at
+// it (the axis says so). Each pixel column draws its samples' minimum and maximum, so a long
+// session costs the window's width, not its samples.
+struct PlotSpec {
+  const char* id;
+  const char* title;
+  const char* unit;
+  std::vector<float> SessionOverview::Set::*series;
+  double band_lo = NAN, band_hi = NAN;  // a shaded band
+  double line = NAN;                    // a dashed threshold
+  double cap = NAN;
+};
+
+void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size);
+
+void DrawPlot(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size) {
+  // A child window of its own: its draw list stays within ImGui's 16-bit vertex indices.
+  ImGui::BeginChild(spec.id, size, false,
+                    ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse);
+  DrawPlotInside(runner, state, spec, size);
+  ImGui::EndChild();
+}
+
+void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size) {
+  const Session& s = runner.session();
+  const SessionPlayer& p = runner.player();
+  const SessionOverview::Data& data = state.overview;
+  constexpr float kLeft = 52.0f, kTop = 18.0f, kBottom = 16.0f, kRight = 6.0f;
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  ImGui::InvisibleButton("plot", size);
+  const bool hovered = ImGui::IsItemHovered(), active = ImGui::IsItemActive();
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  const float x0 = origin.x + kLeft, x1 = origin.x + size.x - kRight;
+  const float y0 = origin.y + kTop, y1 = origin.y + size.y - kBottom;
+  if (hovered) ZoomAndPan(s, state, x0, x1);
+  const auto [w0, w1] = TimeWindow(s, state);
+  const auto x_of = [&](double t) {
+    return x0 + static_cast<float>((t - w0) / (w1 - w0)) * (x1 - x0);
+  };
+  dl->AddRectFilled(origin, ImVec2(origin.x + size.x, origin.y + size.y),
+                    IM_COL32(22, 22, 28, 255));
+  dl->AddRectFilled(ImVec2(x0, y0), ImVec2(x1, y1), IM_COL32(30, 32, 42, 255));
+  // The samples in the window, and the value range over them.
+  const auto first = std::lower_bound(data.t.begin(), data.t.end(), w0);
+  const auto last = std::upper_bound(data.t.begin(), data.t.end(), w1);
+  const std::size_t a = static_cast<std::size_t>(first - data.t.begin()),
+                    b = static_cast<std::size_t>(last - data.t.begin());
+  double lo = 0.0, hi = 0.0;
+  for (const auto& set : data.sets)
+    for (std::size_t k = a; k < b && k < (set.*spec.series).size(); ++k) {
+      const double v = (set.*spec.series)[k];
+      if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    }
+  if (std::isfinite(spec.line)) hi = std::max(hi, spec.line);
+  if (std::isfinite(spec.band_hi)) hi = std::max(hi, spec.band_hi);
+  const bool capped = std::isfinite(spec.cap) && hi > spec.cap;
+  if (capped) hi = spec.cap;
+  hi = hi > lo ? hi + 0.05 * (hi - lo) : lo + 1.0;
+  const auto y_of = [&](double v) {
+    return y1 - static_cast<float>((std::min(v, hi) - lo) / (hi - lo)) * (y1 - y0);
+  };
+  // Axes: value ticks with labels, time ticks with labels.
+  const ImU32 grid = IM_COL32(60, 62, 75, 255), text = IM_COL32(170, 170, 180, 255);
+  const double vstep = TickStep(hi - lo, y1 - y0, 22.0f);
+  for (double v = std::ceil(lo / vstep - 1e-9) * vstep; v <= hi + 1e-12; v += vstep) {
+    const float y = y_of(v);
+    dl->AddLine(ImVec2(x0, y), ImVec2(x1, y), grid);
+    char label[32];
+    std::snprintf(label, sizeof label, "%g", std::round(v / vstep) * vstep + 0.0);  // not -0
+    const float w = ImGui::CalcTextSize(label).x;
+    dl->AddText(ImVec2(x0 - 4 - w, y - 7), text, label);
+  }
+  const double tstep = TickStep(w1 - w0, x1 - x0, 70.0f);
+  for (double t = std::ceil(w0 / tstep - 1e-9) * tstep; t <= w1 + 1e-9; t += tstep) {
+    const float x = x_of(t);
+    dl->AddLine(ImVec2(x, y0), ImVec2(x, y1 + 3), grid);
+    char label[32];
+    std::snprintf(label, sizeof label, "%g s", std::round(t / tstep) * tstep);
+    if (x + ImGui::CalcTextSize(label).x <= origin.x + size.x)
+      dl->AddText(ImVec2(x + 2, y1 + 1), text, label);
+  }
+  // The title, the unit and the legend.
+  char title[160];
+  std::snprintf(title, sizeof title, "%s%s%s%s%s", spec.title, *spec.unit ? " [" : "", spec.unit,
+                *spec.unit ? "]" : "", capped ? " (top clipped)" : "");
+  dl->AddText(ImVec2(x0, origin.y + 1), IM_COL32(220, 220, 230, 255), title);
+  float lx = x0 + ImGui::CalcTextSize(title).x + 14;
+  for (std::size_t i = 0; i < p.sets().size(); ++i) {
+    const Rgb& c = p.sets()[i].colour;
+    const char* name = p.sets()[i].name.c_str();
+    if (lx + ImGui::CalcTextSize(name).x > x1) break;  // no room left
+    dl->AddText(ImVec2(lx, origin.y + 1), IM_COL32(c.r, c.g, c.b, 255), name);
+    lx += ImGui::CalcTextSize(name).x + 10;
+  }
+  dl->PushClipRect(ImVec2(x0, y0), ImVec2(x1, y1), true);
+  if (std::isfinite(spec.band_lo))
+    dl->AddRectFilled(ImVec2(x0, y_of(spec.band_hi)), ImVec2(x1, y_of(spec.band_lo)),
+                      IM_COL32(80, 160, 90, 50));
+  if (std::isfinite(spec.line))
+    for (float x = x0; x < x1; x += 8)
+      dl->AddLine(ImVec2(x, y_of(spec.line)), ImVec2(std::min(x + 4, x1), y_of(spec.line)),
+                  IM_COL32(230, 120, 120, 200));
+  // Every set: per pixel column, its samples' minimum and maximum.
+  std::vector<ImVec2> points;
+  for (std::size_t i = 0; i < data.sets.size() && i < p.sets().size(); ++i) {
+    const std::vector<float>& y = data.sets[i].*spec.series;
+    const Rgb& c = p.sets()[i].colour;
+    points.clear();
+    int column = -1;
+    float cmin = 0, cmax = 0;
+    const auto flush = [&] {
+      if (column < 0) return;
+      const float x = x0 + static_cast<float>(column);
+      points.emplace_back(x, y_of(cmax));
+      if (cmin != cmax) points.emplace_back(x, y_of(cmin));
+    };
+    const std::size_t from = a > 0 ? a - 1 : a, to = std::min(b + 1, y.size());
+    for (std::size_t k = from; k < to; ++k) {
+      const float v = y[k];
+      if (!std::isfinite(v)) {  // a gap (no truth there)
+        flush(), column = -1;
+        if (points.size() > 1)
+          dl->AddPolyline(points.data(), static_cast<int>(points.size()),
+                          IM_COL32(c.r, c.g, c.b, 255), 0, 1.5f);
+        points.clear();
+        continue;
+      }
+      const int col = static_cast<int>(std::floor(x_of(data.t[k]) - x0));
+      if (col != column) {
+        flush();
+        column = col, cmin = cmax = v;
+      } else {
+        cmin = std::min(cmin, v), cmax = std::max(cmax, v);
+      }
+    }
+    flush();
+    if (points.size() > 1)
+      dl->AddPolyline(points.data(), static_cast<int>(points.size()), IM_COL32(c.r, c.g, c.b, 255),
+                      0, 1.5f);
+  }
+  // What is not known yet, and the current time.
+  const double known = data.progress.done ? s.t(s.num_samples() - 1) : data.progress.t;
+  if (!data.progress.done && x_of(known) < x1)
+    dl->AddRectFilled(ImVec2(std::max(x0, x_of(known)), y0), ImVec2(x1, y1),
+                      IM_COL32(0, 0, 0, 120));
+  const float cursor = x_of(s.t(std::max(0, runner.sample())));
+  dl->AddLine(ImVec2(cursor, y0), ImVec2(cursor, y1), IM_COL32(255, 255, 255, 255), 1.5f);
+  dl->PopClipRect();
+  // The read-out under the mouse, and a click to seek.
+  const ImGuiIO& io = ImGui::GetIO();
+  if (hovered && io.MousePos.x >= x0 && io.MousePos.x <= x1 && !data.t.empty()) {
+    const double t = w0 + (io.MousePos.x - x0) / (x1 - x0) * (w1 - w0);
+    const std::size_t k = std::min<std::size_t>(
+        static_cast<std::size_t>(std::lower_bound(data.t.begin(), data.t.end(), t) -
+                                 data.t.begin()),
+        data.t.size() - 1);
+    dl->AddLine(ImVec2(io.MousePos.x, y0), ImVec2(io.MousePos.x, y1), IM_COL32(200, 200, 200, 90));
+    ImGui::BeginTooltip();
+    ImGui::Text("%.3f s", data.t[k]);
+    for (std::size_t i = 0; i < data.sets.size() && i < p.sets().size(); ++i) {
+      const std::vector<float>& y = data.sets[i].*spec.series;
+      const Rgb& c = p.sets()[i].colour;
+      ImGui::TextColored(ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f), "%-4s %.3g %s",
+                         p.sets()[i].name.c_str(), k < y.size() ? y[k] : NAN, spec.unit);
+    }
+    ImGui::EndTooltip();
+    if (active && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+      const int sample = runner.SampleAt(t);
+      if (sample != runner.sample()) state.actions.push_back({ActionKind::kSeek, sample});
+    }
+  }
+}
+
+// The errors against the truth, the estimates' σ, their consistency and their impossibility,
+// every set in one plot per quantity, over the shared time window.
+void DrawErrorPlots(Runner& runner, GuiState& state, float avail) {
+  using Set = SessionOverview::Set;
+  const bool truth = runner.session().has_groundtruth();
+  std::vector<PlotSpec> plots;
+  if (truth) {
+    plots.push_back({"##pe", "position error", "mm", &Set::position_error});
+    plots.push_back({"##oe", "orientation error", "deg", &Set::orientation_error});
+  }
+  plots.push_back({"##sp", "position sigma, largest axis", "mm", &Set::sigma_position});
+  plots.push_back({"##so", "orientation sigma, largest axis", "deg", &Set::sigma_orientation});
+  if (truth)
+    plots.push_back({"##nees", "NEES, chi2(6) 95% band, 99% line", "", &Set::nees, 1.237, 14.449,
+                     16.812, 60.0});
+  plots.push_back({"##pen", "deepest link inside the estimate (5 mm: inconsistent)", "mm",
+                   &Set::penetration, NAN, NAN, state.params.health.penetration * 1000});
+  const float spacing = ImGui::GetStyle().ItemSpacing.x;
+  const ImVec2 size((avail - spacing) / 2, 104);
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    if (i % 2) ImGui::SameLine();
+    DrawPlot(runner, state, plots[i], size);
+  }
+  if (!truth) ImGui::TextUnformatted("no ground truth: errors and NEES are not known");
+}
+
 // Every event of every set in time order, filtered by text; a click seeks to it.
 void DrawEventList(Runner& runner, GuiState& state, float avail) {
   const SessionPlayer& p = runner.player();
@@ -624,8 +828,8 @@ void DrawEventList(Runner& runner, GuiState& state, float avail) {
     std::size_t set;
   };
   std::vector<Row> rows;
-  for (std::size_t i = 0; i < state.events.size(); ++i)
-    for (const TrackerEvent& e : state.events[i])
+  for (std::size_t i = 0; i < state.overview.sets.size(); ++i)
+    for (const TrackerEvent& e : state.overview.sets[i].events)
       if (state.timeline_contacts || !IsContact(e)) rows.push_back({&e, i});
   std::stable_sort(rows.begin(), rows.end(),
                    [](const Row& a, const Row& b) { return a.e->t < b.e->t; });
@@ -650,7 +854,7 @@ void DrawEventList(Runner& runner, GuiState& state, float avail) {
   }
   state.event_list_t = now;
   if (shown == 0)
-    ImGui::TextUnformatted(state.events_progress.done ? "no events" : "finding events...");
+    ImGui::TextUnformatted(state.overview.progress.done ? "no events" : "finding events...");
   ImGui::EndChild();
 }
 
@@ -675,9 +879,11 @@ void HandleKeys(Runner& runner, GuiState& state) {
 //   seek T                      to session time T [s]
 //   key C                       type character C (`space` for a space)
 //   click X Y                   move to window pixel (X, Y), press the left button, release it
+//   scroll X Y N                move to (X, Y), turn the wheel N notches (positive: zoom in)
 //   screenshot FILE             save this frame as PNG
 //   expect time T TOL           the current time is T within TOL [s]
 //   expect events KIND MIN      at least MIN events of KIND (`any`: of every kind), all sets
+//   expect window A B TOL       the timeline and plots show [A, B] s within TOL
 class GuiScript {
  public:
   static GuiScript Load(const std::string& path) {
@@ -706,6 +912,8 @@ class GuiScript {
           fail("key C (one character, or space)");
       } else if (c.verb == "click") {
         if (!(words >> c.a >> c.b)) fail("click X Y (window pixels)");
+      } else if (c.verb == "scroll") {
+        if (!(words >> c.a >> c.b >> c.c)) fail("scroll X Y N (window pixels, notches)");
       } else if (c.verb == "screenshot") {
         if (!(words >> c.text)) fail("screenshot FILE");
       } else if (c.verb == "expect") {
@@ -714,6 +922,9 @@ class GuiScript {
         if (what == "time") {
           c.verb = "expect-time";
           if (!(words >> c.a >> c.b)) fail("expect time T TOL");
+        } else if (what == "window") {
+          c.verb = "expect-window";
+          if (!(words >> c.a >> c.b >> c.c)) fail("expect window A B TOL");
         } else if (what == "events") {
           c.verb = "expect-events";
           if (!(words >> c.text >> c.a)) fail("expect events KIND MIN");
@@ -722,22 +933,28 @@ class GuiScript {
             known = known || c.text == EventKindName(static_cast<EventKind>(k));
           if (!known) fail("an event kind of FORMAT.md, or any");
         } else {
-          fail("expect time ... or expect events ...");
+          fail("expect time ..., expect window ... or expect events ...");
         }
       } else {
-        fail("wait, wait-events, seek, key, click, screenshot or expect");
+        fail("wait, wait-events, seek, key, click, scroll, screenshot or expect");
       }
       script.commands_.push_back(c);
     }
     return script;
   }
 
-  bool done() const { return next_ >= commands_.size() && !pressing_ && !releasing_; }
+  bool done() const {
+    return next_ >= commands_.size() && !pressing_ && !releasing_ && wheel_ == 0.0f;
+  }
   int failures() const { return failures_; }
 
   // Before ImGui::NewFrame: this frame's inputs and checks.
   void BeforeFrame(Runner& runner, GuiState& state, ImGuiIO& io) {
     io.MousePos = mouse_;
+    if (wheel_ != 0.0f) {  // the frame after the move
+      io.MouseWheel = std::exchange(wheel_, 0.0f);
+      return;
+    }
     if (pressing_) {  // the frame after the move: ImGui knows what is under the mouse
       io.MouseDown[0] = true;
       pressing_ = false;
@@ -762,8 +979,7 @@ class GuiScript {
       }
       if (c.verb == "wait-events" || c.verb == "expect-events") {
         runner.overview().Wait();
-        state.events_version =
-            runner.overview().Read(state.events_version, state.events, state.events_progress);
+        state.overview_version = runner.overview().Read(state.overview_version, state.overview);
       }
       if (c.verb == "expect-time") {
         const double t = runner.session().t(std::max(0, runner.sample()));
@@ -772,10 +988,17 @@ class GuiScript {
                    FormatDouble(c.b));
         continue;
       }
+      if (c.verb == "expect-window") {
+        const auto [a, b] = TimeWindow(runner.session(), state);
+        Report(where, std::abs(a - c.a) <= c.c && std::abs(b - c.b) <= c.c,
+               "window [" + FormatDouble(a) + ", " + FormatDouble(b) + "] s, expected [" +
+                   FormatDouble(c.a) + ", " + FormatDouble(c.b) + "] +- " + FormatDouble(c.c));
+        continue;
+      }
       if (c.verb == "expect-events") {
         long count = 0;
-        for (const auto& set : state.events)
-          for (const TrackerEvent& e : set)
+        for (const auto& set : state.overview.sets)
+          for (const TrackerEvent& e : set.events)
             count += c.text == "any" || c.text == EventKindName(e.kind);
         Report(where, count >= c.a,
                std::to_string(count) + " events of " + c.text + ", expected at least " +
@@ -793,6 +1016,10 @@ class GuiScript {
         mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
         io.MousePos = mouse_;
         pressing_ = true;
+      } else if (c.verb == "scroll") {
+        mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
+        io.MousePos = mouse_;
+        wheel_ = static_cast<float>(c.c);
       }
       return;  // one input per frame
     }
@@ -804,7 +1031,7 @@ class GuiScript {
   struct Command {
     int line = 0;
     std::string verb, text;
-    double a = 0.0, b = 0.0;
+    double a = 0.0, b = 0.0, c = 0.0;
   };
   void Report(const std::string& where, bool ok, const std::string& what) {
     std::cout << where << (ok ? "ok: " : "FAILED: ") << what << "\n";
@@ -815,6 +1042,7 @@ class GuiScript {
   std::size_t next_ = 0;
   int wait_ = 0;
   bool pressing_ = false, releasing_ = false;
+  float wheel_ = 0.0f;
   ImVec2 mouse_{-1.0f, -1.0f};
   std::string screenshot_;
   int failures_ = 0;
@@ -854,7 +1082,7 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
   DrawTimeline(runner, state, avail);
   if (ImGui::BeginTabBar("tabs")) {
     if (ImGui::BeginTabItem("Errors and uncertainty")) {
-      DrawErrorPlots(p, state, avail);
+      DrawErrorPlots(runner, state, avail);
       ImGui::EndTabItem();
     }
     if (ImGui::BeginTabItem("Biases and counts")) {
@@ -875,8 +1103,7 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
 }
 
 void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
-  state.events_version =
-      runner.overview().Read(state.events_version, state.events, state.events_progress);
+  state.overview_version = runner.overview().Read(state.overview_version, state.overview);
   HandleKeys(runner, state);
   DrawControlPanel(runner, state, height);
   DrawViews(runner, state, tex, width, height);

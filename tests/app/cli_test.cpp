@@ -734,8 +734,10 @@ TEST(Gui, RealWindowUnderXvfb) {
 // The timeline under the views (issue 37): a script (gui --script) waits for the whole session's
 // events, seeks, clicks the jt lane at 3.5 s (the timeline spans the window's width beside the
 // 330-px panel: 1 s at x 378, 6 s at x 1268) and jumps with ] and [ from event to event; the
-// times it reaches are those of replay's events.csv. Offscreen, and in a real window under Xvfb
-// when there is one. A failed check exits 1 naming the line; a malformed script exits 2.
+// times it reaches are those of replay's events.csv. A wheel notch over the timeline zooms the
+// window the plots share about the mouse, and a click half-way across a plot seeks there.
+// Offscreen, and in a real window under Xvfb when there is one. A failed check exits 1 naming the
+// line; a malformed script exits 2.
 TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
   INHAND_REQUIRE_GUI();
   test::TempDir dir;
@@ -763,6 +765,9 @@ TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
                 "seek %.17g\nwait 2\nkey ]\nwait 2\nexpect time %.17g 1e-9\n"
                 "key ]\nwait 2\nexpect time %.17g 1e-9\n"
                 "key [\nwait 2\nexpect time %.17g 1e-9\n"
+                "scroll 823 300 1   # zoom about 3.5 s by 0.8\nwait 2\nexpect window 1.5 5.5 0.05\n"
+                "click 592 420   # the position error plot, half-way: 3.5 s\nwait 2\n"
+                "expect time 3.5 0.03\n"
                 "screenshot %s\n",
                 times.size(), t3, first, second, first, (dir / "timeline.png").c_str());
   std::ofstream(dir / "timeline.script") << script;
@@ -776,7 +781,7 @@ TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
         test::RunInhand("gui " + ShortSession() + " --script " + (dir / "timeline.script"), runner);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("FAILED"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("timeline.script:20: ok"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("timeline.script:26: ok"), std::string::npos) << r.output;
     ExpectInterface(ReadImage(dir / "timeline.png"));
   }
   // A check that fails says where, and exits 1; a script that cannot be read exits 2.

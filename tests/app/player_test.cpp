@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "inhand/app/event_overview.hpp"
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/player.hpp"
+#include "inhand/app/session_overview.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/sessions/session.hpp"
 
@@ -60,10 +60,10 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
   EXPECT_GE(frames, 8);
 }
 
-// The GUI's timeline reads the whole session's events from an overview replayed on a thread of its
-// own: they are replay's events.csv, event for event (time, kind, subject, value) and set for set;
-// a second read with the version it returned copies nothing.
-TEST(EventOverview, FindsTheEventsReplayWrites) {
+// The GUI's timeline and plots read the whole session from an overview replayed on a thread of
+// its own: its events are replay's events.csv, event for event (time, kind, subject, value) and set
+// for set, its series estimates.csv's; a second read with the version it returned adds nothing.
+TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
   test::TempDir dir;
   ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " +
                             (dir / "session"))
@@ -75,20 +75,43 @@ TEST(EventOverview, FindsTheEventsReplayWrites) {
             0);
   Session session = Session::Load(dir / "session");
   const std::vector<app::ModalitySet> sets = app::ParseModalities("jt,jtf");
-  app::EventOverview overview(session, TrackerParams(), sets);
+  app::SessionOverview overview(session, TrackerParams(), sets);
   overview.Wait();
-  std::vector<std::vector<TrackerEvent>> events;
-  app::EventOverview::Progress progress;
-  const long version = overview.Read(0, events, progress);
+  app::SessionOverview::Data data;
+  const long version = overview.Read(-1, data);
+  const app::SessionOverview::Progress& progress = data.progress;
   EXPECT_GT(version, 0);
   EXPECT_TRUE(progress.done);
   EXPECT_EQ(progress.error, "");
   EXPECT_DOUBLE_EQ(progress.share, 1.0);
   EXPECT_DOUBLE_EQ(progress.t, session.t(session.num_samples() - 1));
-  ASSERT_EQ(events.size(), 2u);
-  std::vector<std::vector<TrackerEvent>> untouched = {{TrackerEvent()}};
-  EXPECT_EQ(overview.Read(version, untouched, progress), version);
-  EXPECT_EQ(untouched.size(), 1u);
+  ASSERT_EQ(data.sets.size(), 2u);
+  ASSERT_EQ(data.t.size(), static_cast<std::size_t>(session.num_samples()));
+  EXPECT_EQ(overview.Read(version, data), version);
+  EXPECT_EQ(data.t.size(), static_cast<std::size_t>(session.num_samples()));  // nothing added
+  // estimates.csv's position error and largest position sigma, per set, sample for sample.
+  {
+    std::ifstream in(dir / "replay/estimates.csv");
+    std::string line;
+    std::getline(in, line);
+    std::map<std::string, std::size_t> row;
+    double worst = 0.0;
+    while (std::getline(in, line)) {
+      std::vector<std::string> f;
+      std::stringstream ss(line);
+      for (std::string v; std::getline(ss, v, ',');) f.push_back(v);
+      const std::size_t i = f.at(1) == "jt" ? 0 : 1;
+      const std::size_t k = row[f[1]]++;
+      ASSERT_LT(k, data.t.size());
+      EXPECT_EQ(std::stod(f[0]), data.t[k]);
+      worst = std::max(worst, std::abs(std::stod(f.at(15)) - data.sets[i].position_error[k]));
+      const double sigma = std::max({std::stod(f[9]), std::stod(f[10]), std::stod(f[11])}) * 1000;
+      worst = std::max(worst, std::abs(sigma - data.sets[i].sigma_position[k]));
+    }
+    EXPECT_LT(worst, 1e-3);  // float
+  }
+  std::vector<std::vector<TrackerEvent>> events;
+  for (const auto& s : data.sets) events.push_back(s.events);
   // events.csv: per set, in time order (the overview's are in the order found).
   std::map<std::string, std::vector<std::string>> csv;
   std::ifstream in(dir / "replay/events.csv");

@@ -1,0 +1,61 @@
+#pragma once
+// The whole session at a glance, for the GUI's timeline, plots and event list: a player of its own
+// replays the session on a background thread, without pictures, and publishes what it has found so
+// far — every set's events (tracker/events.hpp) and, per joint sample, the series the plots draw.
+// The GUI's own player only knows the session up to the time shown.
+#include <atomic>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "inhand/app/player.hpp"
+
+namespace inhand::app {
+
+class SessionOverview {
+ public:
+  // The session must outlive the overview; the work starts at once.
+  SessionOverview(const Session& session, const TrackerParams& params,
+                  std::vector<ModalitySet> sets);
+  ~SessionOverview();  // stops the work
+  SessionOverview(const SessionOverview&) = delete;
+  SessionOverview& operator=(const SessionOverview&) = delete;
+
+  struct Progress {
+    double t = 0.0;      // [s] the samples are replayed up to here
+    double share = 0.0;  // of the session's samples
+    bool done = false;
+    std::string error;  // the replay failed (its message); done
+  };
+  // One set's events in the order found, and its series, one value per sample of Data::t (NaN
+  // where there is no ground truth).
+  struct Set {
+    std::vector<TrackerEvent> events;
+    std::vector<float> position_error, orientation_error;  // [mm], [deg]
+    std::vector<float> sigma_position, sigma_orientation;  // [mm], [deg]: the largest axis's
+    std::vector<float> nees;
+    std::vector<float> penetration;  // [mm] the deepest link inside the estimate
+  };
+  struct Data {
+    std::vector<double> t;  // [s] the samples replayed
+    std::vector<Set> sets;  // in the order of the sets given
+    Progress progress;
+  };
+  // Appends to `data` what was found since it was last read with the version this returned
+  // (version < 0: `data` is cleared and gets everything); returns the new version. `progress`
+  // is always brought up to date.
+  long Read(long version, Data& data) const;
+  // Blocks until the whole session is replayed.
+  void Wait();
+
+ private:
+  void Run(const Session& session, const TrackerParams& params, std::vector<ModalitySet> sets);
+  mutable std::mutex mutex_;
+  Data data_;
+  long version_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace inhand::app

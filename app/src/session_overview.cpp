@@ -1,0 +1,114 @@
+#include "inhand/app/session_overview.hpp"
+
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <utility>
+
+namespace inhand::app {
+
+namespace {
+
+template <typename T>
+void AppendFrom(const std::vector<T>& from, std::vector<T>& to, std::size_t have) {
+  if (from.size() > have) to.insert(to.end(), from.begin() + static_cast<long>(have), from.end());
+}
+
+}  // namespace
+
+SessionOverview::SessionOverview(const Session& session, const TrackerParams& params,
+                                 std::vector<ModalitySet> sets) {
+  data_.sets.resize(sets.size());
+  thread_ = std::thread(
+      [this, &session, params, s = std::move(sets)]() mutable { Run(session, params, s); });
+}
+
+SessionOverview::~SessionOverview() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+void SessionOverview::Wait() {
+  if (thread_.joinable()) thread_.join();
+}
+
+long SessionOverview::Read(long version, Data& data) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  data.progress = data_.progress;
+  if (version == version_) return version;
+  if (version < 0) data.t.clear(), data.sets.clear();
+  const std::size_t have = data.t.size();
+  AppendFrom(data_.t, data.t, have);
+  data.sets.resize(data_.sets.size());
+  for (std::size_t i = 0; i < data_.sets.size(); ++i) {
+    const Set& from = data_.sets[i];
+    Set& to = data.sets[i];
+    AppendFrom(from.events, to.events, to.events.size());
+    for (auto series : {&Set::position_error, &Set::orientation_error, &Set::sigma_position,
+                        &Set::sigma_orientation, &Set::nees, &Set::penetration})
+      AppendFrom(from.*series, to.*series, have);
+  }
+  return version_;
+}
+
+void SessionOverview::Run(const Session& session, const TrackerParams& params,
+                          std::vector<ModalitySet> sets) {
+  try {
+    SessionPlayer player(session, params, std::move(sets));
+    const int n = player.num_samples();
+    const std::size_t num_sets = player.sets().size();
+    Data found;  // since the last publication
+    found.sets.resize(num_sets);
+    const auto publish = [&](int k, bool done) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      data_.t.insert(data_.t.end(), found.t.begin(), found.t.end());
+      found.t.clear();
+      for (std::size_t i = 0; i < num_sets; ++i) {
+        Set& from = found.sets[i];
+        Set& to = data_.sets[i];
+        to.events.insert(to.events.end(), from.events.begin(), from.events.end());
+        from.events.clear();
+        for (auto series : {&Set::position_error, &Set::orientation_error, &Set::sigma_position,
+                            &Set::sigma_orientation, &Set::nees, &Set::penetration}) {
+          (to.*series).insert((to.*series).end(), (from.*series).begin(), (from.*series).end());
+          (from.*series).clear();
+        }
+      }
+      data_.progress.t = session.t(k);
+      data_.progress.share = n > 1 ? static_cast<double>(k) / (n - 1) : 1.0;
+      data_.progress.done = done;
+      ++version_;
+    };
+    constexpr int kPublish = 250;  // samples
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    for (int k = 0; k < n; ++k) {
+      if (stop_) return;
+      player.Step(k);
+      found.t.push_back(session.t(k));
+      for (std::size_t i = 0; i < num_sets; ++i) {
+        const EstimateRecord& r = player.last(i);
+        Set& s = found.sets[i];
+        s.events.insert(s.events.end(), r.events.begin(), r.events.end());
+        const bool truth = std::isfinite(r.position_error);
+        s.position_error.push_back(static_cast<float>(truth ? r.position_error * 1000 : kNaN));
+        s.orientation_error.push_back(
+            static_cast<float>(truth ? r.orientation_error * 180 / M_PI : kNaN));
+        s.sigma_position.push_back(static_cast<float>(r.sigma_position.maxCoeff() * 1000));
+        s.sigma_orientation.push_back(
+            static_cast<float>(r.sigma_orientation.maxCoeff() * 180 / M_PI));
+        s.nees.push_back(static_cast<float>(truth ? r.nees : kNaN));
+        s.penetration.push_back(static_cast<float>(r.penetration * 1000));
+      }
+      if (k % kPublish == kPublish - 1 && k != n - 1) publish(k, false);
+    }
+    for (std::size_t i = 0; i < num_sets; ++i) player.CloseEvents(i, found.sets[i].events);
+    publish(n - 1, true);
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    data_.progress.done = true;
+    data_.progress.error = e.what();
+    ++version_;
+  }
+}
+
+}  // namespace inhand::app
