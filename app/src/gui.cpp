@@ -33,6 +33,7 @@
 #include "inhand/app/player.hpp"
 #include "inhand/app/session_overview.hpp"
 #include "inhand/core/error.hpp"
+#include "inhand/core/time.hpp"
 #include "inhand/sessions/image_io.hpp"
 
 namespace inhand::app {
@@ -71,6 +72,9 @@ struct GuiState {
   double event_list_t = -1.0;  // [s] the time the event list last scrolled to
   // The time window the timeline and the plots share [s] (NaN: the whole session).
   double view_t0 = NAN, view_t1 = NAN;
+  std::vector<char> hidden;  // per set: left out of the timeline and the plots (keys 1-9)
+  bool help = false;         // the keys' help over the views (h)
+  bool Hidden(std::size_t set) const { return set < hidden.size() && hidden[set]; }
 };
 
 class Runner {
@@ -281,6 +285,7 @@ void DrawControlPanel(Runner& runner, GuiState& state, int height) {
   if (ImGui::Button("Go"))
     state.actions.push_back({ActionKind::kSeek, runner.SampleAt(state.typed_time)});
   ImGui::Text("3-D view: drag it to orbit, wheel to zoom");
+  ImGui::TextUnformatted("keys: h (space, arrows, [ ], 1-9)");
   ImGui::Separator();
   ImGui::Text("Overlay layers");
   bool changed = false;
@@ -535,7 +540,9 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
   for (std::size_t i = 0; i < p.sets().size() && i < state.overview.sets.size(); ++i) {
     const float y = origin.y + kAxis + kLane * static_cast<float>(i);
     const Rgb& c = p.sets()[i].colour;
-    dl->AddText(ImVec2(origin.x + 4, y), IM_COL32(c.r, c.g, c.b, 255), p.sets()[i].name.c_str());
+    dl->AddText(ImVec2(origin.x + 4, y), IM_COL32(c.r, c.g, c.b, state.Hidden(i) ? 90 : 255),
+                p.sets()[i].name.c_str());
+    if (state.Hidden(i)) continue;
     // The health band, from each change to the next.
     HealthState health = HealthState::kOk;
     double from = t0;
@@ -666,9 +673,10 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
   const std::size_t a = static_cast<std::size_t>(first - data.t.begin()),
                     b = static_cast<std::size_t>(last - data.t.begin());
   double lo = 0.0, hi = 0.0;
-  for (const auto& set : data.sets)
-    for (std::size_t k = a; k < b && k < (set.*spec.series).size(); ++k) {
-      const double v = (set.*spec.series)[k];
+  for (std::size_t i = 0; i < data.sets.size(); ++i)
+    for (std::size_t k = a; k < b && k < (data.sets[i].*spec.series).size() && !state.Hidden(i);
+         ++k) {
+      const double v = (data.sets[i].*spec.series)[k];
       if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
     }
   if (std::isfinite(spec.line)) hi = std::max(hi, spec.line);
@@ -709,7 +717,8 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
     const Rgb& c = p.sets()[i].colour;
     const char* name = p.sets()[i].name.c_str();
     if (lx + ImGui::CalcTextSize(name).x > x1) break;  // no room left
-    dl->AddText(ImVec2(lx, origin.y + 1), IM_COL32(c.r, c.g, c.b, 255), name);
+    dl->AddText(ImVec2(lx, origin.y + 1), IM_COL32(c.r, c.g, c.b, state.Hidden(i) ? 90 : 255),
+                name);
     lx += ImGui::CalcTextSize(name).x + 10;
   }
   dl->PushClipRect(ImVec2(x0, y0), ImVec2(x1, y1), true);
@@ -723,6 +732,7 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
   // Every set: per pixel column, its samples' minimum and maximum.
   std::vector<ImVec2> points;
   for (std::size_t i = 0; i < data.sets.size() && i < p.sets().size(); ++i) {
+    if (state.Hidden(i)) continue;
     const std::vector<float>& y = data.sets[i].*spec.series;
     const Rgb& c = p.sets()[i].colour;
     points.clear();
@@ -778,6 +788,7 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
     ImGui::BeginTooltip();
     ImGui::Text("%.3f s", data.t[k]);
     for (std::size_t i = 0; i < data.sets.size() && i < p.sets().size(); ++i) {
+      if (state.Hidden(i)) continue;
       const std::vector<float>& y = data.sets[i].*spec.series;
       const Rgb& c = p.sets()[i].colour;
       ImGui::TextColored(ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f), "%-4s %.3g %s",
@@ -863,13 +874,62 @@ void DrawEventList(Runner& runner, GuiState& state, float avail) {
 void HandleKeys(Runner& runner, GuiState& state) {
   const ImGuiIO& io = ImGui::GetIO();
   if (io.WantTextInput) return;
-  const double now = runner.session().t(std::max(0, runner.sample()));
+  const Session& s = runner.session();
+  const double now = s.t(std::max(0, runner.sample()));
+  const std::size_t sets = runner.player().sets().size();
+  state.hidden.resize(sets, 0);
   for (const ImWchar c : io.InputQueueCharacters) {
     if (c == ' ') state.actions.push_back({ActionKind::kTogglePlay});
     if (c == '[' || c == ']')
       if (const TrackerEvent* e = NextEvent(state, now, c == '[' ? -1 : 1))
         state.actions.push_back({ActionKind::kSeek, runner.SampleAt(e->t)});
+    if (c >= '1' && c <= '9' && static_cast<std::size_t>(c - '1') < sets)
+      state.hidden[static_cast<std::size_t>(c - '1')] ^= 1;
+    if (c == 'h' || c == '?') state.help = !state.help;
   }
+  // Arrows: a sample back or on; with shift, a camera frame.
+  const bool left = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_LeftArrow));
+  const bool right = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_RightArrow));
+  if (!left && !right) return;
+  if (!io.KeyShift) {
+    state.actions.push_back({ActionKind::kSeek, runner.sample() + (right ? 1 : -1)});
+    return;
+  }
+  if (right) {
+    state.actions.push_back({ActionKind::kStepFrame});
+    return;
+  }
+  // The frame before the last one shown (or the first, when none is before it).
+  const auto& frames = s.camera_frames();
+  int f = runner.frame();
+  while (f >= 0 && frames[static_cast<std::size_t>(f)].t > now + kTimeTolerance) --f;
+  if (f >= 1) state.actions.push_back({ActionKind::kSeek, runner.SampleAt(frames[f - 1].t)});
+}
+
+// The keys, over the views (h).
+void DrawHelp(GuiState& state, int width, int height) {
+  if (!state.help) return;
+  ImGui::SetNextWindowPos(
+      ImVec2(static_cast<float>(width) * 0.5f, static_cast<float>(height) * 0.4f), ImGuiCond_Always,
+      ImVec2(0.5f, 0.5f));
+  ImGui::Begin("keys", &state.help,
+               ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse |
+                   ImGuiWindowFlags_NoSavedSettings);
+  const char* rows[][2] = {{"space", "play / pause"},
+                           {"left / right", "one joint sample back / on"},
+                           {"shift + left / right", "one camera frame back / on"},
+                           {"[ / ]", "previous / next event (contacts as the Events tab says)"},
+                           {"1 ... 9", "show / hide set 1 ... 9 in the timeline and the plots"},
+                           {"wheel, right drag", "zoom, pan the time window (timeline, plots)"},
+                           {"double click", "the whole session again"},
+                           {"click, drag", "seek (timeline, plots, event list)"},
+                           {"h or ?", "this help"}};
+  for (const auto& row : rows) {
+    ImGui::TextColored(ImVec4(0.6f, 0.8f, 1.0f, 1.0f), "%-22s", row[0]);
+    ImGui::SameLine();
+    ImGui::TextUnformatted(row[1]);
+  }
+  ImGui::End();
 }
 
 // gui --script FILE: one command per line (# starts a comment), each run at a frame of its own;
@@ -880,6 +940,7 @@ void HandleKeys(Runner& runner, GuiState& state) {
 //   key C                       type character C (`space` for a space)
 //   click X Y                   move to window pixel (X, Y), press the left button, release it
 //   scroll X Y N                move to (X, Y), turn the wheel N notches (positive: zoom in)
+//   press KEY                   left, right, shift+left or shift+right
 //   screenshot FILE             save this frame as PNG
 //   expect time T TOL           the current time is T within TOL [s]
 //   expect events KIND MIN      at least MIN events of KIND (`any`: of every kind), all sets
@@ -914,6 +975,10 @@ class GuiScript {
         if (!(words >> c.a >> c.b)) fail("click X Y (window pixels)");
       } else if (c.verb == "scroll") {
         if (!(words >> c.a >> c.b >> c.c)) fail("scroll X Y N (window pixels, notches)");
+      } else if (c.verb == "press") {
+        if (!(words >> c.text) || (c.text != "left" && c.text != "right" &&
+                                   c.text != "shift+left" && c.text != "shift+right"))
+          fail("press left, right, shift+left or shift+right");
       } else if (c.verb == "screenshot") {
         if (!(words >> c.text)) fail("screenshot FILE");
       } else if (c.verb == "expect") {
@@ -936,7 +1001,7 @@ class GuiScript {
           fail("expect time ..., expect window ... or expect events ...");
         }
       } else {
-        fail("wait, wait-events, seek, key, click, scroll, screenshot or expect");
+        fail("wait, wait-events, seek, key, press, click, scroll, screenshot or expect");
       }
       script.commands_.push_back(c);
     }
@@ -944,13 +1009,20 @@ class GuiScript {
   }
 
   bool done() const {
-    return next_ >= commands_.size() && !pressing_ && !releasing_ && wheel_ == 0.0f;
+    return next_ >= commands_.size() && !pressing_ && !releasing_ && wheel_ == 0.0f && key_ < 0;
   }
   int failures() const { return failures_; }
 
   // Before ImGui::NewFrame: this frame's inputs and checks.
   void BeforeFrame(Runner& runner, GuiState& state, ImGuiIO& io) {
     io.MousePos = mouse_;
+    io.KeyShift = shift_;
+    if (key_ >= 0) {  // the frame after the press
+      io.KeysDown[key_] = false;
+      key_ = -1;
+      io.KeyShift = shift_ = false;
+      return;
+    }
     if (wheel_ != 0.0f) {  // the frame after the move
       io.MouseWheel = std::exchange(wheel_, 0.0f);
       return;
@@ -1016,6 +1088,12 @@ class GuiScript {
         mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
         io.MousePos = mouse_;
         pressing_ = true;
+      } else if (c.verb == "press") {
+        shift_ = c.text.rfind("shift+", 0) == 0;
+        key_ = io.KeyMap[c.text.find("left") != std::string::npos ? ImGuiKey_LeftArrow
+                                                                  : ImGuiKey_RightArrow];
+        io.KeyShift = shift_;
+        if (key_ >= 0) io.KeysDown[key_] = true;
       } else if (c.verb == "scroll") {
         mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
         io.MousePos = mouse_;
@@ -1043,6 +1121,8 @@ class GuiScript {
   int wait_ = 0;
   bool pressing_ = false, releasing_ = false;
   float wheel_ = 0.0f;
+  int key_ = -1;  // io.KeysDown index held for a frame
+  bool shift_ = false;
   ImVec2 mouse_{-1.0f, -1.0f};
   std::string screenshot_;
   int failures_ = 0;
@@ -1107,6 +1187,7 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   HandleKeys(runner, state);
   DrawControlPanel(runner, state, height);
   DrawViews(runner, state, tex, width, height);
+  DrawHelp(state, width, height);
 }
 
 int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, GuiState& state,
@@ -1122,6 +1203,9 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
   ImGui::GetIO().IniFilename = nullptr;
   ImGui::StyleColorsDark();
   ImGui_ImplOpenGL2_Init();
+  // The arrows at GLFW's key codes, as the window's backend maps them (gui --script presses them).
+  ImGui::GetIO().KeyMap[ImGuiKey_LeftArrow] = GLFW_KEY_LEFT;
+  ImGui::GetIO().KeyMap[ImGuiKey_RightArrow] = GLFW_KEY_RIGHT;
   Textures tex;
   const int frames = script ? std::numeric_limits<int>::max() : cmd.frames > 0 ? cmd.frames : 1;
   if (!script) runner.overview().Wait();  // the screenshot shows every event

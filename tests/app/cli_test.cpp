@@ -735,7 +735,8 @@ TEST(Gui, RealWindowUnderXvfb) {
 // events, seeks, clicks the jt lane at 3.5 s (the timeline spans the window's width beside the
 // 330-px panel: 1 s at x 378, 6 s at x 1268) and jumps with ] and [ from event to event; the
 // times it reaches are those of replay's events.csv. A wheel notch over the timeline zooms the
-// window the plots share about the mouse, and a click half-way across a plot seeks there.
+// window the plots share about the mouse, and a click half-way across a plot seeks there. The
+// arrows step a joint sample, with shift a camera frame.
 // Offscreen, and in a real window under Xvfb when there is one. A failed check exits 1 naming the
 // line; a malformed script exits 2.
 TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
@@ -755,21 +756,27 @@ TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
   const double t3 = 3.0;  // a sample's time: seeking there lands on it
   const double first = after(t3), second = after(first);
   ASSERT_LT(second, 6.0);
-  char script[1024];
-  std::snprintf(script, sizeof script,
-                "wait-events\n"
-                "expect events any %zu\n"
-                "expect events contact_made 4\n"
-                "seek 2.0\nwait 2\nexpect time 2.0 0.001\n"
-                "click 823 300   # the jt lane, 3.5 s\nwait 2\nexpect time 3.5 0.03\n"
-                "seek %.17g\nwait 2\nkey ]\nwait 2\nexpect time %.17g 1e-9\n"
-                "key ]\nwait 2\nexpect time %.17g 1e-9\n"
-                "key [\nwait 2\nexpect time %.17g 1e-9\n"
-                "scroll 823 300 1   # zoom about 3.5 s by 0.8\nwait 2\nexpect window 1.5 5.5 0.05\n"
-                "click 592 420   # the position error plot, half-way: 3.5 s\nwait 2\n"
-                "expect time 3.5 0.03\n"
-                "screenshot %s\n",
-                times.size(), t3, first, second, first, (dir / "timeline.png").c_str());
+  char script[2048];
+  std::snprintf(
+      script, sizeof script,
+      "wait-events\n"
+      "expect events any %zu\n"
+      "expect events contact_made 4\n"
+      "seek 2.0\nwait 2\nexpect time 2.0 0.001\n"
+      "click 823 300   # the jt lane, 3.5 s\nwait 2\nexpect time 3.5 0.03\n"
+      "seek %.17g\nwait 2\nkey ]\nwait 2\nexpect time %.17g 1e-9\n"
+      "key ]\nwait 2\nexpect time %.17g 1e-9\n"
+      "key [\nwait 2\nexpect time %.17g 1e-9\n"
+      "scroll 823 300 1   # zoom about 3.5 s by 0.8\nwait 2\nexpect window 1.5 5.5 0.05\n"
+      "click 592 420   # the position error plot, half-way: 3.5 s\nwait 2\n"
+      "expect time 3.5 0.03\n"
+      "seek 3.0\nwait 2\npress right\nwait 1\nexpect time 3.002 1e-9\n"
+      "press shift+right   # the next camera frame (10 Hz)\nwait 1\nexpect time 3.1 1e-9\n"
+      "press shift+left\nwait 1\nexpect time 3.0 1e-9\n"
+      "press left\nwait 1\nexpect time 2.998 1e-9\n"
+      "key h\nkey 2\nwait 2\n"
+      "screenshot %s\n",
+      times.size(), t3, first, second, first, (dir / "timeline.png").c_str());
   std::ofstream(dir / "timeline.script") << script;
   std::vector<std::string> runners = {"env -u DISPLAY"};
   if (std::system("command -v xvfb-run > /dev/null 2>&1") == 0)
@@ -781,7 +788,14 @@ TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
         test::RunInhand("gui " + ShortSession() + " --script " + (dir / "timeline.script"), runner);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("FAILED"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("timeline.script:26: ok"), std::string::npos) << r.output;
+    // Every check ran and passed.
+    std::size_t expects = 0, oks = 0;
+    for (std::size_t at = 0; (at = std::string(script).find("\nexpect ", at)) != std::string::npos;
+         ++at)
+      ++expects;
+    for (std::size_t at = 0; (at = r.output.find(": ok: ", at)) != std::string::npos; ++at) ++oks;
+    EXPECT_EQ(oks, expects) << r.output;
+    EXPECT_GE(expects, 12u);
     ExpectInterface(ReadImage(dir / "timeline.png"));
   }
   // A check that fails says where, and exits 1; a script that cannot be read exits 2.
