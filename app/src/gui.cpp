@@ -60,9 +60,6 @@ struct GuiState {
   char params_path[512] = "params.json";
   std::deque<Action> actions;
   std::string status;
-  // Histories over the samples stepped so far, per modality set (the counts tab; the error
-  // plots read the overview).
-  std::vector<std::vector<float>> constraints, gated, innovation;
   bool pictures_dirty = true;
   // The whole session's events and series (SessionOverview), and how far they are known.
   SessionOverview::Data overview;
@@ -95,8 +92,6 @@ class Runner {
     next_ = 0;
     last_frame_ = -1;
     checkpoints_.clear();
-    const std::size_t sets = player_->sets().size();
-    for (auto* h : Histories()) h->assign(sets, {});
     StepTo(0);
   }
   // Deterministic: going back resumes from the nearest checkpoint at or before k (the run from
@@ -113,19 +108,11 @@ class Runner {
         player_->Restore(it->second.player);
         next_ = it->first;
         last_frame_ = it->second.last_frame;
-        for (auto* h : Histories())
-          for (auto& series : *h) series.resize(static_cast<std::size_t>(next_));
         state_.pictures_dirty = true;
       }
     }
     while (next_ <= k) {
       player_->Step(next_);
-      for (std::size_t i = 0; i < player_->sets().size(); ++i) {
-        const EstimateRecord& r = player_->last(i);
-        state_.constraints[i].push_back(static_cast<float>(r.constraints));
-        state_.gated[i].push_back(static_cast<float>(r.gated));
-        state_.innovation[i].push_back(static_cast<float>(r.visual_mahalanobis));
-      }
       if (player_->last_frame() >= 0)
         last_frame_ = player_->last_frame(), state_.pictures_dirty = true;
       if (!session_.info().camera)
@@ -175,10 +162,6 @@ class Runner {
     int last_frame;
   };
   std::map<int, RunnerCheckpoint> checkpoints_;
-  // Every per-sample history of the plots (one series per modality set).
-  std::array<std::vector<std::vector<float>>*, 3> Histories() {
-    return {&state_.constraints, &state_.gated, &state_.innovation};
-  }
 };
 
 struct Textures {
@@ -329,40 +312,24 @@ void DrawControlPanel(Runner& runner, GuiState& state, int height) {
   ImGui::End();
 }
 
-// One row per estimate set: joint biases, constraints, gated features, visual innovation.
-void DrawBiasPlots(const SessionPlayer& p, const GuiState& state, float avail) {
+// Each set's joint biases now, as a histogram per set (one bar per joint, ±6°).
+void DrawBiases(const SessionPlayer& p, float avail) {
+  const float w = (avail - 3 * ImGui::GetStyle().ItemSpacing.x) / 4;
   for (std::size_t i = 0; i < p.sets().size(); ++i) {
     const auto& b = p.last(i).biases;
     std::vector<float> deg(static_cast<std::size_t>(b.size()));
     for (long j = 0; j < b.size(); ++j)
       deg[static_cast<std::size_t>(j)] = static_cast<float>(b[j] * 180 / M_PI);
-    const float w = (avail - 3 * ImGui::GetStyle().ItemSpacing.x) / 4;
     const Rgb& c = p.sets()[i].colour;
-    const ImVec4 colour(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f);
-    ImGui::PushStyleColor(ImGuiCol_PlotLines, colour);
-    ImGui::PushStyleColor(ImGuiCol_PlotHistogram, colour);
+    ImGui::PushStyleColor(ImGuiCol_PlotHistogram,
+                          ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f));
     char id[48], text[96];
     std::snprintf(id, sizeof(id), "##bias%zu", i);
-    std::snprintf(text, sizeof(text), "%s biases [deg], +-6", p.sets()[i].name.c_str());
+    std::snprintf(text, sizeof(text), "%s joint biases [deg], +-6", p.sets()[i].name.c_str());
+    if (i % 4) ImGui::SameLine();
     ImGui::PlotHistogram(id, deg.data(), static_cast<int>(deg.size()), 0, text, -6.0f, 6.0f,
                          ImVec2(w, 44));
-    ImGui::SameLine();
-    std::snprintf(id, sizeof(id), "##constraints%zu", i);
-    std::snprintf(text, sizeof(text), "constraints %d",
-                  state.constraints[i].empty() ? 0 : static_cast<int>(state.constraints[i].back()));
-    ImGui::PlotLines(id, state.constraints[i].data(), static_cast<int>(state.constraints[i].size()),
-                     0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
-    ImGui::SameLine();
-    std::snprintf(id, sizeof(id), "##gated%zu", i);
-    std::snprintf(text, sizeof(text), "gated features %d", p.last(i).gated);
-    ImGui::PlotLines(id, state.gated[i].data(), static_cast<int>(state.gated[i].size()), 0, text,
-                     0.0f, FLT_MAX, ImVec2(w, 44));
-    ImGui::SameLine();
-    std::snprintf(id, sizeof(id), "##innovation%zu", i);
-    std::snprintf(text, sizeof(text), "innovation (Mahal.) %.1f", p.last(i).visual_mahalanobis);
-    ImGui::PlotLines(id, state.innovation[i].data(), static_cast<int>(state.innovation[i].size()),
-                     0, text, 0.0f, FLT_MAX, ImVec2(w, 44));
-    ImGui::PopStyleColor(2);
+    ImGui::PopStyleColor();
   }
 }
 
@@ -828,6 +795,24 @@ void DrawErrorPlots(Runner& runner, GuiState& state, float avail) {
   if (!truth) ImGui::TextUnformatted("no ground truth: errors and NEES are not known");
 }
 
+// What each set fused and refused, every set in one plot per quantity, over the shared window.
+void DrawCountPlots(Runner& runner, GuiState& state, float avail) {
+  using Set = SessionOverview::Set;
+  const std::vector<PlotSpec> plots = {
+      {"##constraints", "contact constraints applied", "", &Set::constraints},
+      {"##gated", "measurements gated (contacts, vision)", "", &Set::gated},
+      {"##innovation", "vision: mean Mahalanobis distance of the last image", "",
+       &Set::visual_mahalanobis},
+      {"##unexplained", "joint torque the contacts leave unexplained", "N m",
+       &Set::unexplained_torque}};
+  const float spacing = ImGui::GetStyle().ItemSpacing.x;
+  const ImVec2 size((avail - spacing) / 2, 104);
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    if (i % 2) ImGui::SameLine();
+    DrawPlot(runner, state, plots[i], size);
+  }
+}
+
 // Every event of every set in time order, filtered by text; a click seeks to it.
 void DrawEventList(Runner& runner, GuiState& state, float avail) {
   const SessionPlayer& p = runner.player();
@@ -1166,7 +1151,8 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
       ImGui::EndTabItem();
     }
     if (ImGui::BeginTabItem("Biases and counts")) {
-      DrawBiasPlots(p, state, avail);
+      DrawBiases(p, avail);
+      DrawCountPlots(runner, state, avail);
       ImGui::EndTabItem();
     }
     if (ImGui::BeginTabItem("Feature matching")) {

@@ -45,7 +45,8 @@ long SessionOverview::Read(long version, Data& data) const {
     Set& to = data.sets[i];
     AppendFrom(from.events, to.events, to.events.size());
     for (auto series : {&Set::position_error, &Set::orientation_error, &Set::sigma_position,
-                        &Set::sigma_orientation, &Set::nees, &Set::penetration})
+                        &Set::sigma_orientation, &Set::nees, &Set::penetration, &Set::constraints,
+                        &Set::gated, &Set::visual_mahalanobis, &Set::unexplained_torque})
       AppendFrom(from.*series, to.*series, have);
   }
   return version_;
@@ -68,8 +69,10 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         Set& to = data_.sets[i];
         to.events.insert(to.events.end(), from.events.begin(), from.events.end());
         from.events.clear();
-        for (auto series : {&Set::position_error, &Set::orientation_error, &Set::sigma_position,
-                            &Set::sigma_orientation, &Set::nees, &Set::penetration}) {
+        for (auto series :
+             {&Set::position_error, &Set::orientation_error, &Set::sigma_position,
+              &Set::sigma_orientation, &Set::nees, &Set::penetration, &Set::constraints,
+              &Set::gated, &Set::visual_mahalanobis, &Set::unexplained_torque}) {
           (to.*series).insert((to.*series).end(), (from.*series).begin(), (from.*series).end());
           (from.*series).clear();
         }
@@ -98,6 +101,10 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
             static_cast<float>(r.sigma_orientation.maxCoeff() * 180 / M_PI));
         s.nees.push_back(static_cast<float>(truth ? r.nees : kNaN));
         s.penetration.push_back(static_cast<float>(r.penetration * 1000));
+        s.constraints.push_back(static_cast<float>(r.constraints));
+        s.gated.push_back(static_cast<float>(r.gated));
+        s.visual_mahalanobis.push_back(static_cast<float>(r.visual_mahalanobis));
+        s.unexplained_torque.push_back(static_cast<float>(r.unexplained_torque));
       }
       if (k % kPublish == kPublish - 1 && k != n - 1) publish(k, false);
     }

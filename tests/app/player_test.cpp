@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -109,6 +110,24 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
       worst = std::max(worst, std::abs(sigma - data.sets[i].sigma_position[k]));
     }
     EXPECT_LT(worst, 1e-3);  // float
+  }
+  // summary.json's per-set means of the counts and the unexplained torque.
+  {
+    std::ifstream in(dir / "replay/summary.json");
+    const nlohmann::json summary = nlohmann::json::parse(in).at("modalities");
+    for (std::size_t i = 0; i < sets.size(); ++i) {
+      const nlohmann::json& m = summary.at(sets[i].name);
+      double constraints = 0.0, unexplained = 0.0;
+      for (std::size_t k = 0; k < data.t.size(); ++k)
+        constraints += data.sets[i].constraints[k],
+            unexplained += data.sets[i].unexplained_torque[k];
+      const double n = static_cast<double>(data.t.size());
+      EXPECT_NEAR(constraints / n, m.at("constraints_per_step_mean").get<double>(), 1e-9)
+          << sets[i].name;
+      EXPECT_NEAR(unexplained / n, m.at("unexplained_torque_Nm_mean").get<double>(), 1e-5)
+          << sets[i].name;
+      EXPECT_GT(constraints, 0.0) << sets[i].name;
+    }
   }
   std::vector<std::vector<TrackerEvent>> events;
   for (const auto& s : data.sets) events.push_back(s.events);

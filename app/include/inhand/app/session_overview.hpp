@@ -36,6 +36,10 @@ class SessionOverview {
     std::vector<float> sigma_position, sigma_orientation;  // [mm], [deg]: the largest axis's
     std::vector<float> nees;
     std::vector<float> penetration;  // [mm] the deepest link inside the estimate
+    std::vector<float> constraints;  // contact blocks applied
+    std::vector<float> gated;        // measurement blocks the gates rejected (contacts, vision)
+    std::vector<float> visual_mahalanobis;  // mean over the last image's features
+    std::vector<float> unexplained_torque;  // [N m] sets with torques
   };
   struct Data {
     std::vector<double> t;  // [s] the samples replayed
