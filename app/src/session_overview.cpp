@@ -9,6 +9,20 @@ namespace inhand::app {
 
 namespace {
 
+using Set = SessionOverview::Set;
+
+// Every per-sample series of a set: the reader's copy and the publication both go over these.
+constexpr std::vector<float> Set::*kSeries[] = {&Set::position_error,
+                                                &Set::orientation_error,
+                                                &Set::sigma_position,
+                                                &Set::sigma_orientation,
+                                                &Set::nees,
+                                                &Set::penetration,
+                                                &Set::constraints,
+                                                &Set::gated,
+                                                &Set::visual_mahalanobis,
+                                                &Set::unexplained_torque};
+
 template <typename T>
 void AppendFrom(const std::vector<T>& from, std::vector<T>& to, std::size_t have) {
   if (from.size() > have) to.insert(to.end(), from.begin() + static_cast<long>(have), from.end());
@@ -44,10 +58,7 @@ long SessionOverview::Read(long version, Data& data) const {
     const Set& from = data_.sets[i];
     Set& to = data.sets[i];
     AppendFrom(from.events, to.events, to.events.size());
-    for (auto series : {&Set::position_error, &Set::orientation_error, &Set::sigma_position,
-                        &Set::sigma_orientation, &Set::nees, &Set::penetration, &Set::constraints,
-                        &Set::gated, &Set::visual_mahalanobis, &Set::unexplained_torque})
-      AppendFrom(from.*series, to.*series, have);
+    for (auto series : kSeries) AppendFrom(from.*series, to.*series, have);
   }
   return version_;
 }
@@ -69,10 +80,7 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         Set& to = data_.sets[i];
         to.events.insert(to.events.end(), from.events.begin(), from.events.end());
         from.events.clear();
-        for (auto series :
-             {&Set::position_error, &Set::orientation_error, &Set::sigma_position,
-              &Set::sigma_orientation, &Set::nees, &Set::penetration, &Set::constraints,
-              &Set::gated, &Set::visual_mahalanobis, &Set::unexplained_torque}) {
+        for (auto series : kSeries) {
           (to.*series).insert((to.*series).end(), (from.*series).begin(), (from.*series).end());
           (from.*series).clear();
         }
