@@ -28,6 +28,7 @@
 #include <utility>
 
 #include "gui_gl.hpp"
+#include "inhand/app/event_palette.hpp"
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/match_pictures.hpp"
 #include "inhand/app/player.hpp"
@@ -361,52 +362,7 @@ void DrawFeatureMatching(const SessionPlayer& p, const Textures& tex, float avai
       m.debug.virtual_corners.size(), m.matches.size(), m.num_inliers());
 }
 
-ImU32 HealthColour(HealthState state) {
-  switch (state) {
-    case HealthState::kOk:
-      return IM_COL32(50, 130, 70, 255);
-    case HealthState::kUncertain:
-      return IM_COL32(220, 190, 50, 255);
-    case HealthState::kInconsistent:
-      return IM_COL32(240, 120, 40, 255);
-    case HealthState::kLost:
-      return IM_COL32(230, 50, 50, 255);
-  }
-  return IM_COL32(255, 255, 255, 255);
-}
-
-ImU32 EventColour(const TrackerEvent& e) {
-  switch (e.kind) {
-    case EventKind::kContactMade:
-      return IM_COL32(120, 200, 120, 255);
-    case EventKind::kContactBroken:
-      return IM_COL32(140, 140, 140, 255);
-    case EventKind::kGripLoosened:
-      return IM_COL32(240, 220, 60, 255);
-    case EventKind::kFeaturesLost:
-    case EventKind::kTagsElsewhere:
-      return IM_COL32(255, 120, 60, 255);
-    case EventKind::kFeaturesFound:
-    case EventKind::kRelocalized:
-    case EventKind::kRecovered:
-      return IM_COL32(80, 200, 255, 255);
-    case EventKind::kShiftRefused:
-      return IM_COL32(90, 130, 255, 255);
-    case EventKind::kContactsGated:
-    case EventKind::kVisionGated:
-      return IM_COL32(190, 110, 255, 255);
-    case EventKind::kHealth:
-      return HealthColour(e.health.state);
-    case EventKind::kNeesBeyondBound:
-      return IM_COL32(255, 80, 200, 255);
-    default:  // samples and images the tracker could not use, or used late
-      return IM_COL32(235, 235, 235, 255);
-  }
-}
-
-bool IsContact(const TrackerEvent& e) {
-  return e.kind == EventKind::kContactMade || e.kind == EventKind::kContactBroken;
-}
+ImU32 Im(const Rgb& c, int alpha = 255) { return IM_COL32(c.r, c.g, c.b, alpha); }
 
 // A tick step of 1, 2 or 5 times a power of ten giving at least `min_px` between ticks.
 double TickStep(double span, float width, float min_px) {
@@ -516,7 +472,8 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
     const auto band = [&](double to) {
       const float a = std::max(x_of(from), x0), b = std::min(x_of(to), x1);
       if (a < b)
-        dl->AddRectFilled(ImVec2(a, y + kLane - 5), ImVec2(b, y + kLane - 2), HealthColour(health));
+        dl->AddRectFilled(ImVec2(a, y + kLane - 5), ImVec2(b, y + kLane - 2),
+                          Im(HealthColour(health)));
     };
     for (const TrackerEvent& e : state.overview.sets[i].events)
       if (e.kind == EventKind::kHealth) band(e.t), from = e.t, health = e.health.state;
@@ -529,7 +486,7 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
       if (!state.timeline_contacts && IsContact(e)) continue;
       const float x = x_of(e.t);
       if (x < x0 - 3 || x > x1 + 3) continue;  // outside the window
-      const ImU32 colour = EventColour(e);
+      const ImU32 colour = Im(EventColour(e));
       if (IsContact(e))
         dl->AddLine(ImVec2(x, y + 1), ImVec2(x, y + 6), colour);
       else if (e.duration > 0.0 && !IsContact(e))
@@ -547,7 +504,7 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
       const float x = x_of(e.t);
       if (x < x0 - 3 || x > x1 + 3) continue;
       dl->AddRectFilled(ImVec2(x - 1, y + kLane - 9), ImVec2(x + 1, y + kLane - 2),
-                        HealthColour(e.health.state));
+                        Im(HealthColour(e.health.state)));
       if (hovered && io.MousePos.y >= y && io.MousePos.y < y + kLane &&
           std::abs(io.MousePos.x - x) < under_dx)
         under_mouse = &e, under_set = i, under_dx = std::abs(io.MousePos.x - x);
@@ -840,7 +797,7 @@ void DrawEventList(Runner& runner, GuiState& state, float avail) {
                   EventMessage(*r.e, p.models().hand).c_str());
     if (!state.event_filter.PassFilter(line)) continue;
     ImGui::PushID(shown++);
-    const ImU32 c = EventColour(*r.e);
+    const ImU32 c = Im(EventColour(*r.e));
     ImGui::PushStyleColor(ImGuiCol_Text, ImGui::ColorConvertU32ToFloat4(c));
     if (ImGui::Selectable(line, std::abs(r.e->t - now) < 1e-6))
       state.actions.push_back({ActionKind::kSeek, runner.SampleAt(r.e->t)});

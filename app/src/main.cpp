@@ -127,6 +127,9 @@ int main(int argc, char** argv) {
                          "tracker parameters (JSON, as written to params.json)");
   replay_cmd->add_flag("--no-video", replay.no_video, "skip replay.mp4");
   replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");
+  replay_cmd->add_flag("--no-timeline", replay.no_timeline,
+                       "pictures without the timeline strip of events under them (which takes "
+                       "one more pass over the session without pictures)");
   replay_cmd->add_flag(
       "--mcap", replay.mcap,
       "also write replay.mcap for Foxglove/Lichtblick (poses, errors, image + overlays, contacts)");

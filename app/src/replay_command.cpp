@@ -15,14 +15,17 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "inhand/app/commands.hpp"
+#include "inhand/app/event_palette.hpp"
 #include "inhand/app/frame_composer.hpp"
 #include "inhand/app/player.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/core/time.hpp"
 #include "inhand/io/detail/json_fields.hpp"
+#include "inhand/renderer/timeline_strip.hpp"
 #include "inhand/renderer/video.hpp"
 #include "inhand/sessions/image_io.hpp"
 #include "mcap_export.hpp"
@@ -338,6 +341,26 @@ class Pictures {
   std::exception_ptr error_;
 };
 
+// Every set's events over the whole session, found by a replay of its own without pictures
+// (deterministic: the same events the replay proper will find), for the video's timeline strip,
+// which shows them before they come.
+std::vector<std::vector<TrackerEvent>> EventsAhead(const SessionPlayer& like, int jobs) {
+  SessionPlayer player(like.session(), like.params(), like.sets());
+  std::vector<std::vector<TrackerEvent>> events(player.sets().size());
+  std::vector<EstimateRecord> records;
+  const int n = player.num_samples();
+  for (int k = 0; k < n;) {
+    const int count = player.StepBlock(k, 256, jobs, records);
+    for (std::size_t j = 0; j < records.size(); ++j) {  // sample-major
+      const std::vector<TrackerEvent>& found = records[j].events;
+      events[j % events.size()].insert(events[j % events.size()].end(), found.begin(), found.end());
+    }
+    k += count;
+  }
+  for (std::size_t i = 0; i < events.size(); ++i) player.CloseEvents(i, events[i]);
+  return events;
+}
+
 }  // namespace
 
 // What the replay wrote, and per set its terminal error (against the truth) and median step.
@@ -394,8 +417,15 @@ int RunReplay(const ReplayCommand& cmd) {
                                          : 10.0;
   double next_picture_t = n > 0 ? session.t(0) : 0.0;
   int pictures = 0;
+  // Under every picture, the session's timeline with its events and the current time.
+  std::optional<TimelineStrip> timeline;
+  std::unique_ptr<TimelineStripPainter> strip;  // painted at the first picture, as wide
   const auto emit = [&](FrameComposer& composer, const PictureState& state, int index) {
-    const Image8 picture = has_camera ? composer.Compose(state) : composer.ComposeExternal(state);
+    Image8 picture = has_camera ? composer.Compose(state) : composer.ComposeExternal(state);
+    if (timeline) {
+      if (!strip) strip = std::make_unique<TimelineStripPainter>(*timeline, picture.width);
+      picture = StackBelow(picture, strip->At(state.t));
+    }
     if (!cmd.no_video) {
       if (!video)
         video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width,
@@ -408,6 +438,9 @@ int RunReplay(const ReplayCommand& cmd) {
       WriteImage((out / name).string(), picture);
     }
   };
+  if (want_pictures && !cmd.no_timeline && n > 0)
+    timeline =
+        MakeTimelineStrip(sets, EventsAhead(player, cmd.jobs), session.t(0), session.t(n - 1));
   std::unique_ptr<Pictures> drawn;
   if (want_pictures) drawn = std::make_unique<Pictures>(player, cmd.jobs > 1, emit);
   std::vector<SetStats> stats(sets.size());

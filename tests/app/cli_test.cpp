@@ -4,6 +4,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +15,7 @@
 
 #include "inhand/renderer/video.hpp"
 #include "inhand/sessions/image_io.hpp"
+#include "inhand/sessions/session.hpp"
 
 #include "test_support.hpp"
 
@@ -250,6 +253,100 @@ TEST(Cli, CompareFoldersOfReplayFrames) {
   EXPECT_NE(mixed.output.find("give two images or two folders"), std::string::npos) << mixed.output;
 }
 
+// One row of events.csv: t, set, kind, subject, value, count, duration, then the quoted message.
+struct EventRow {
+  double t = 0.0, value = 0.0;
+  std::string set, kind, subject, message;
+};
+
+std::vector<EventRow> ReadEvents(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "t,set,kind,subject,value,count,duration,message");
+  std::vector<EventRow> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::size_t at = 0;
+    for (int i = 0; i < 7; ++i) {
+      const std::size_t comma = line.find(',', at);
+      f.push_back(line.substr(at, comma - at));
+      at = comma + 1;
+    }
+    EventRow r;
+    r.t = std::stod(f[0]);
+    r.set = f[1], r.kind = f[2], r.subject = f[3];
+    r.value = std::stod(f[4]);
+    r.message = line.substr(at);
+    EXPECT_TRUE(r.message.size() >= 2 && r.message.front() == '"' && r.message.back() == '"')
+        << line;
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// The timeline strip under the replay's pictures (renderer/timeline_strip.hpp: the axis from 48 px
+// to 8 px before the right edge over the session's span) shows the current time as a white line
+// and, per set, the health and the events events.csv lists, found by a pass of their own.
+void ExpectTheStripShows(const std::string& replay, const std::string& session_dir) {
+  const Session session = Session::Load(session_dir);
+  const double t0 = session.t(0), t1 = session.t(session.num_samples() - 1);
+  const std::vector<std::string> sets = {"j", "jt", "jta", "jtf"};
+  const auto near = [](const std::uint8_t* px, std::array<int, 3> rgb, int tol) {
+    for (int c = 0; c < 3; ++c)
+      if (std::abs(px[c] - rgb[static_cast<std::size_t>(c)]) > tol) return false;
+    return true;
+  };
+  for (const int frame : {10, 30, 50}) {
+    char name[64];
+    std::snprintf(name, sizeof name, "/frames/frame_%06d.png", frame);
+    const Image8 img = ReadImage(replay + name);
+    ASSERT_EQ(img.height, 580);
+    const auto x_of = [&](double t) { return 48 + (t - t0) / (t1 - t0) * (img.width - 8 - 48); };
+    // The cursor: the one white column in the lanes, at the frame's time.
+    const double t = session.camera_frames().at(static_cast<std::size_t>(frame)).t;
+    std::vector<int> white;
+    for (int x = 40; x < img.width; ++x)
+      if (near(img.pixel(x, 480 + 18 + 30), {255, 255, 255}, 0)) white.push_back(x);
+    ASSERT_EQ(white.size(), 1u) << frame;
+    EXPECT_NEAR(white[0], x_of(t), 1.5) << frame;
+    if (frame != 50) continue;
+    // The last frame: each set's health band in the state events.csv gives it (colours of
+    // inhand/app/event_palette.cpp, lightened by 14 where played), and a dot at each loosened grip.
+    const std::map<std::string, std::array<int, 3>> health = {{"ok", {64, 144, 84}},
+                                                              {"uncertain", {234, 204, 64}}};
+    std::vector<double> from(sets.size(), t0);
+    std::vector<std::string> state(sets.size(), "ok");
+    int bands = 0, dots = 0;
+    const auto band = [&](std::size_t i, double to) {
+      if (x_of(to) - x_of(from[i]) < 6) return;
+      const int x = static_cast<int>(std::lround(0.5 * (x_of(from[i]) + x_of(to))));
+      const int y = 480 + 18 + 16 * static_cast<int>(i) + 12;
+      ASSERT_TRUE(health.count(state[i])) << state[i];
+      EXPECT_TRUE(near(img.pixel(x, y), health.at(state[i]), 3))
+          << sets[i] << " " << state[i] << " from " << from[i] << " s";
+      ++bands;
+    };
+    for (const EventRow& e : ReadEvents(replay + "/events.csv")) {
+      const std::size_t i =
+          static_cast<std::size_t>(std::find(sets.begin(), sets.end(), e.set) - sets.begin());
+      ASSERT_LT(i, sets.size()) << e.set;
+      if (e.kind == "health") {
+        band(i, e.t);
+        from[i] = e.t, state[i] = e.subject;
+      } else if (e.kind == "grip_loosened") {
+        const int y = 480 + 18 + 16 * static_cast<int>(i) + 7;
+        EXPECT_TRUE(near(img.pixel(static_cast<int>(std::lround(x_of(e.t))), y), {254, 234, 74}, 3))
+            << e.set << " grip loosened at " << e.t << " s";
+        ++dots;
+      }
+    }
+    for (std::size_t i = 0; i < sets.size(); ++i) band(i, t1);
+    EXPECT_GE(bands, 6);
+    EXPECT_GE(dots, 1);
+  }
+}
+
 TEST(Cli, ReplayEndToEnd) {
   test::TempDir dir;
   const test::CommandResult r =
@@ -294,41 +391,13 @@ TEST(Cli, ReplayEndToEnd) {
   EXPECT_GT(rows, 100);
   const VideoInfo v = ProbeVideo(dir / "replay/replay.mp4");
   EXPECT_EQ(v.frames, s.at("camera_frames").get<int>());
-  EXPECT_EQ(v.height, 480);
+  // The panels (480 px) over the timeline strip: an axis (18 px), a lane per set (16 px each)
+  // and the legend (18 px).
+  EXPECT_EQ(v.height, 480 + 18 + 16 * 4 + 18);
+  ExpectTheStripShows(dir / "replay", ShortSession());
 }
 
 // The jtf set's summary.json of `scenario` simulated with `noise` and `seed`, replayed.
-// One row of events.csv: t, set, kind, subject, value, count, duration, then the quoted message.
-struct EventRow {
-  double t = 0.0, value = 0.0;
-  std::string set, kind, subject, message;
-};
-
-std::vector<EventRow> ReadEvents(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line, "t,set,kind,subject,value,count,duration,message");
-  std::vector<EventRow> rows;
-  while (std::getline(in, line)) {
-    std::vector<std::string> f;
-    std::size_t at = 0;
-    for (int i = 0; i < 7; ++i) {
-      const std::size_t comma = line.find(',', at);
-      f.push_back(line.substr(at, comma - at));
-      at = comma + 1;
-    }
-    EventRow r;
-    r.t = std::stod(f[0]);
-    r.set = f[1], r.kind = f[2], r.subject = f[3];
-    r.value = std::stod(f[4]);
-    r.message = line.substr(at);
-    EXPECT_TRUE(r.message.size() >= 2 && r.message.front() == '"' && r.message.back() == '"')
-        << line;
-    rows.push_back(r);
-  }
-  return rows;
-}
 
 // The jtf set's summary and events, and its health cause per sample (estimates.csv).
 struct JtfRun {
