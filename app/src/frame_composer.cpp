@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "inhand/core/error.hpp"
@@ -60,7 +61,8 @@ std::string HudLine(const std::string& name, const PictureState::Set& set) {
   return line.str();
 }
 
-FrameComposer::FrameComposer(const SessionPlayer& player) : p_(player) {
+FrameComposer::FrameComposer(const SessionPlayer& player)
+    : p_(player), query_(player.models().hand, player.models().object) {
   hand_meshes_ = UploadHand(renderer_, p_.models().hand);
   object_meshes_ =
       UploadObject(renderer_, p_.models().object, PrintedTagMeshes(p_.models().object));
@@ -125,15 +127,16 @@ void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const
   }
 }
 
-Scene FrameComposer::ExternalScene(const PictureState& st, const Intrinsics& K) const {
+Scene FrameComposer::ExternalScene(const PictureState& st, const Intrinsics& K,
+                                   const Orbit& from) const {
   const Session& s = p_.session();
   Scene outside;
   outside.K = K;
   outside.background = Vec3(0.93, 0.94, 0.96);
   const Aabb box = p_.models().object.Bounds();
   const Vec3 centre = st.sets.back().record.T_PO * box.Center();
-  outside.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), orbit.distance, orbit.azimuth,
-                             orbit.elevation, Vec3::UnitY());
+  outside.T_PC = OrbitCamera(0.5 * centre + Vec3(0, 0.025, 0.0), from.distance, from.azimuth,
+                             from.elevation, Vec3::UnitY());
   AddHand(outside, hand_meshes_, st.link_poses, 1.0, true);
   if (s.has_groundtruth()) {
     ObjectStyle truth;
@@ -147,6 +150,34 @@ Scene FrameComposer::ExternalScene(const PictureState& st, const Intrinsics& K) 
     AddObject(outside, object_meshes_, st.sets[i].record.T_PO, style);
   }
   return outside;
+}
+
+std::vector<OverlayGap> FrameComposer::Gaps(const PictureState& st) {
+  const HandModel& hand = p_.models().hand;
+  query_.Query(st.link_poses, st.sets.back().record.T_PO, 0.05, pairs_);
+  // One per finger (the links after the same first moving joint; the palm on its own).
+  std::map<int, const ContactPair*> nearest;
+  for (const ContactPair& c : pairs_) {
+    const auto& support = hand.support.at(static_cast<std::size_t>(c.link));
+    const int finger = support.empty() ? -1 : support.front();
+    const ContactPair*& n = nearest[finger];
+    if (!n || c.distance < n->distance) n = &c;
+  }
+  std::vector<OverlayGap> gaps;
+  for (const auto& [finger, c] : nearest) gaps.push_back({c->c_f_P, c->c_o_P, c->distance});
+  return gaps;
+}
+
+void FrameComposer::AddSideView(const PictureState& st, Image8& view) {
+  // A third of the width, the orbit turned by 90° about the vertical, level.
+  Orbit side = orbit;
+  side.azimuth -= M_PI / 2;
+  side.elevation = 0.1;
+  side.distance *= 0.8;
+  const int w = view.width / 3 / 2 * 2, h = w * 3 / 4;
+  RenderOutput small;
+  renderer_.Render(ExternalScene(st, IntrinsicsFromFov(w, h, 40.0), side), small, false);
+  Inset(view, small.colour, "side view");
 }
 
 Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layers) {
@@ -183,18 +214,32 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
 
   // External 3-D view around the palm: estimates translucent in their colours, truth opaque.
   RenderOutput orbit_out;
-  renderer_.Render(ExternalScene(st, K), orbit_out, false);
+  const Scene outside = ExternalScene(st, K, orbit);
+  renderer_.Render(outside, orbit_out, false);
+  OverlayFrame cues;
+  cues.camera = std::move(orbit_out.colour);
+  cues.T_PC = outside.T_PC;
+  cues.K = outside.K;
+  cues.gaps = Gaps(st);
+  OverlayLayers only_gaps;
+  only_gaps.silhouette = only_gaps.outline = only_gaps.contacts = only_gaps.forces = false;
+  only_gaps.cones = only_gaps.features = only_gaps.axes = only_gaps.uncertainty = false;
+  only_gaps.hud = false;
+  Image8 external = painter_->Paint(cues, only_gaps);
+  AddSideView(st, external);
   const bool truth = s.has_groundtruth();
   return SideBySide(
-      {&annotated, middle, &orbit_out.colour},
+      {&annotated, middle, &external},
       {truth ? "camera + estimates (truth dashed)" : "camera + estimates (no ground truth)",
        virtual_caption,
-       truth ? "3-D view: truth dark, estimates translucent" : "3-D view: estimates translucent"});
+       std::string(truth ? "3-D view: truth dark, estimates translucent"
+                         : "3-D view: estimates translucent") +
+           ", finger gaps to " + p_.sets()[last].name});
 }
 
 Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height,
                                       const OverlayLayers& layers) {
-  const Scene scene = ExternalScene(st, IntrinsicsFromFov(width, height, 40.0));
+  const Scene scene = ExternalScene(st, IntrinsicsFromFov(width, height, 40.0), orbit);
   RenderOutput out;
   renderer_.Render(scene, out, false);
   OverlayFrame of;
@@ -205,13 +250,17 @@ Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int hei
   std::ostringstream hud;
   hud << std::fixed << std::setprecision(3) << "t = " << st.t << " s   3-D view (no camera): "
       << (p_.session().has_groundtruth() ? "truth dark, estimates translucent"
-                                         : "estimates translucent, no ground truth");
+                                         : "estimates translucent, no ground truth")
+      << ", finger gaps to " << p_.sets().back().name;
   of.hud.push_back(hud.str());
   AddEstimates(&of, st);
   // The objects are already drawn in 3-D: the overlays add contacts, forces, axes and the HUD.
+  of.gaps = Gaps(st);
   OverlayLayers l = layers;
   l.silhouette = l.outline = l.features = false;
-  return painter_->Paint(of, l);
+  Image8 view = painter_->Paint(of, l);
+  AddSideView(st, view);
+  return view;
 }
 
 }  // namespace inhand::app

@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/imgproc.hpp>
 
 #include "inhand/core/error.hpp"
@@ -148,6 +149,33 @@ void DrawContactMarker(cv::Mat& img, const OverlayContact& c, const Vec2& p,
 }
 
 // The HUD's lines, wrapped to the picture's width, on darkened boxes from the top-left.
+void DrawGap(cv::Mat& img, const Transform& T_CP, const Intrinsics& K, const OverlayGap& g) {
+  Vec2 a, b;
+  if (!ProjectP(T_CP, K, g.link_P, a) || !ProjectP(T_CP, K, g.object_P, b)) return;
+  const double mm = g.distance * 1000;
+  const cv::Scalar c = mm <= -1.0   ? cv::Scalar(220, 40, 40)
+                       : mm < 1.0   ? cv::Scalar(40, 170, 70)
+                       : mm <= 10.0 ? cv::Scalar(235, 130, 20)
+                                    : cv::Scalar(110, 110, 120);
+  Line(img, a, b, c, 2);
+  cv::circle(img, Fx(a), 3 << kShift, c, cv::FILLED, cv::LINE_AA, kShift);
+  cv::circle(img, Fx(b), 3 << kShift, c, 1, cv::LINE_AA, kShift);
+  char label[32];
+  if (std::abs(mm) < 1.0)
+    std::snprintf(label, sizeof label, "touch");
+  else
+    std::snprintf(label, sizeof label, mm < 0.0 ? "%.0f mm in" : "%.0f mm", std::abs(mm));
+  int base = 0;
+  const cv::Size sz = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &base);
+  // Beside the link's end, away from the object.
+  const Vec2 away = (a - b).norm() > 1e-6 ? Vec2((a - b).normalized()) : Vec2(1, 0);
+  const cv::Point at(static_cast<int>(a.x() + 8 * away.x() - (away.x() < 0 ? sz.width : 0)),
+                     static_cast<int>(a.y() + 8 * away.y() + (away.y() > 0 ? sz.height : 0)));
+  cv::rectangle(img, cv::Rect(at.x - 2, at.y - sz.height - 2, sz.width + 4, sz.height + 5),
+                cv::Scalar(255, 255, 255), cv::FILLED);
+  cv::putText(img, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.4, c * 0.8, 1, cv::LINE_AA);
+}
+
 void DrawHud(cv::Mat& img, const std::vector<std::string>& hud) {
   int y = 6;
   std::vector<std::string> lines;
@@ -256,9 +284,27 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
     }
   }
 
+  if (layers.gaps)
+    for (const OverlayGap& g : frame.gaps) DrawGap(img, T_CP, K, g);
   if (layers.hud && !frame.hud.empty()) DrawHud(img, frame.hud);
   if (layers.hud && !frame.estimates.empty()) DrawLegend(img, frame.estimates);
   return out;
+}
+
+void Inset(Image8& big, const Image8& small, const std::string& caption) {
+  INHAND_CHECK(big.channels == 3 && small.channels == 3, "Inset takes RGB images");
+  constexpr int kMargin = 6, kCaption = 16;
+  const int x0 = big.width - small.width - kMargin, y0 = big.height - small.height - kMargin;
+  INHAND_CHECK(x0 >= 1 && y0 - kCaption >= 1, "Inset: the small image does not fit");
+  cv::Mat img(big.height, big.width, CV_8UC3, big.data.data());
+  const cv::Mat part(small.height, small.width, CV_8UC3,
+                     const_cast<std::uint8_t*>(small.data.data()));
+  cv::rectangle(img,
+                cv::Rect(x0 - 1, y0 - kCaption - 1, small.width + 2, small.height + kCaption + 2),
+                cv::Scalar(30, 30, 30), cv::FILLED);
+  part.copyTo(img(cv::Rect(x0, y0, small.width, small.height)));
+  cv::putText(img, caption, cv::Point(x0 + 4, y0 - 4), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
 }
 
 Image8 SideBySide(const std::vector<const Image8*>& images,

@@ -284,6 +284,37 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
   EXPECT_EQ(elsewhere_samples[1], 50);  // from the first image to the second, at 10 Hz
 }
 
+// The external view's depth cue: per finger, the gap from its link nearest to the last set's
+// estimate. Against the object's distance field (exact distances to the mesh's triangles, not GJK
+// on its convex pieces): the object's end lies on the surface, the link's end as far from it as
+// the gap says; the grasping fingers touch.
+TEST(FrameComposer, FingerGapsAgreeWithTheObjectsDistanceField) {
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise none --seed 2 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
+  const Session session = Session::Load(dir / "session");
+  SessionPlayer player(session, TrackerParams(), app::ParseModalities("j"));
+  const int k_end = session.num_samples() * 3 / 4;
+  for (int k = 0; k <= k_end; ++k) player.Step(k);
+  app::FrameComposer composer(player);
+  const app::PictureState st = app::FrameComposer::Capture(player, -1, session.t(k_end));
+  const std::vector<OverlayGap> gaps = composer.Gaps(st);
+  const auto& field = player.models().object.field;
+  ASSERT_TRUE(field && !field->empty());
+  const Transform T_OP = st.sets.back().record.T_PO.inverse();
+  int touching = 0;
+  for (const OverlayGap& g : gaps) {
+    EXPECT_LE(g.distance, 0.05);
+    EXPECT_NEAR(field->Distance(T_OP * g.object_P), 0.0, 1e-3);
+    EXPECT_NEAR(field->Distance(T_OP * g.link_P), g.distance, 1.5e-3) << g.distance;
+    touching += g.distance <= 1e-3;
+  }
+  EXPECT_GE(gaps.size(), 4u);
+  EXPECT_GE(touching, 3);
+}
+
 // Each set's HUD line says what the set claims beside what it gets wrong: the largest principal σ
 // of its position and of its orientation (a covariance turned away from the axes, whose
 // principal σ are 1, 3, 2 mm and 1, 5, 2 deg), the error only where there is ground truth.

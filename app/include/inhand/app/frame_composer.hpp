@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "inhand/app/player.hpp"
+#include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/renderer/overlay.hpp"
 #include "inhand/renderer/views.hpp"
 
@@ -51,7 +52,8 @@ class FrameComposer {
   Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {}) {
     return Compose(Capture(p_, camera_frame, t), layers);
   }
-  // The external 3-D view (hand, every set's estimate, truth, contacts, forces and a HUD),
+  // The external 3-D view (hand, every set's estimate, truth, contacts, forces and a HUD, with its
+  // depth cues: each finger's gap to the last set's estimate and a small view from the side),
   // width x height pixels.
   Image8 ComposeExternal(const PictureState& state, int width = 960, int height = 720,
                          const OverlayLayers& layers = {});
@@ -59,6 +61,9 @@ class FrameComposer {
                          const OverlayLayers& layers = {}) {
     return ComposeExternal(Capture(p_, -1, t), width, height, layers);
   }
+  // The depth cue the external view draws: each finger's gap to the last set's estimate, from
+  // its link nearest to it within 50 mm (Bullet's GJK, as the filter's contacts); the palm's too.
+  std::vector<OverlayGap> Gaps(const PictureState& state);
   // The external 3-D view's orbit around the object (the GUI drags it).
   struct Orbit {
     double azimuth = -2.2;    // [rad]
@@ -69,13 +74,19 @@ class FrameComposer {
  private:
   // Every set's estimate with its contacts, and the HUD lines, as the overlays take them.
   void AddEstimates(OverlayFrame* frame, const PictureState& state) const;
-  // The 3-D scene around the palm: hand, truth dark, estimates translucent, seen through K.
-  Scene ExternalScene(const PictureState& state, const Intrinsics& K) const;
+  // The 3-D scene around the palm: hand, truth dark, estimates translucent, seen through K from
+  // the orbit.
+  Scene ExternalScene(const PictureState& state, const Intrinsics& K, const Orbit& from) const;
+  // The scene seen from the side (the orbit turned by 90°) in the lower right corner of the
+  // external view.
+  void AddSideView(const PictureState& state, Image8& view);
   const SessionPlayer& p_;
   Renderer renderer_;
   HandMeshes hand_meshes_;
   std::vector<int> object_meshes_;
   std::unique_ptr<OverlayPainter> painter_;
+  BulletContactQuery query_;
+  std::vector<ContactPair> pairs_;
 };
 
 }  // namespace inhand::app

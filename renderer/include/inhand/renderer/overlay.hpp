@@ -36,6 +36,7 @@ struct OverlayLayers {
   bool axes = true;
   bool uncertainty = true;
   bool hud = true;
+  bool gaps = true;  // OverlayFrame::gaps
 };
 
 struct OverlayContact {
@@ -63,12 +64,22 @@ struct OverlayEstimate {
   std::vector<OverlayFeature> features;
 };
 
+// How far a link is from the object (a depth cue for views that cannot show it): a segment from
+// the link's nearest point to the object's, coloured by the distance (within 1 mm "touch" green,
+// 1 mm or more inside red, within 10 mm orange, farther grey), labelled with it.
+struct OverlayGap {
+  Vec3 link_P = Vec3::Zero();
+  Vec3 object_P = Vec3::Zero();
+  double distance = 0.0;  // [m] signed (< 0: inside)
+};
+
 struct OverlayFrame {
   Image8 camera;  // RGB background, the size of K
   Transform T_PC = Transform::Identity();
   Intrinsics K;
   std::vector<OverlayEstimate> estimates;  // drawn in order; put ground truth first
   std::vector<std::string> hud;
+  std::vector<OverlayGap> gaps;
   double friction_cone_deg = 45.0;
   double force_scale = 0.004;  // [m/N] arrow length per newton
   double axes_length = 0.03;   // [m]
@@ -93,6 +104,9 @@ class OverlayPainter {
 // A HUD line broken between words so that every piece is at most `max_width` pixels wide in the
 // HUD's font (a single word wider than that stays whole); pieces after the first are indented.
 std::vector<std::string> WrapHudLine(const std::string& line, int max_width);
+
+// `small` framed in the lower right corner of `big`, a caption bar above it.
+void Inset(Image8& big, const Image8& small, const std::string& caption);
 
 // Places images side by side, scaled to the first one's height, with a caption bar each.
 Image8 SideBySide(const std::vector<const Image8*>& images,
