@@ -450,7 +450,7 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
     dl->AddLine(ImVec2(x, origin.y + kAxis - 4), ImVec2(x, origin.y + height),
                 IM_COL32(70, 70, 80, 255));
     char label[32];
-    std::snprintf(label, sizeof label, "%g s", std::round(t / step) * step);
+    std::snprintf(label, sizeof label, "%g s", std::round(t / step) * step + 0.0);  // not -0
     if (x + 2 + ImGui::CalcTextSize(label).x <= origin.x + width)
       dl->AddText(ImVec2(x + 2, origin.y), IM_COL32(170, 170, 180, 255), label);
   }
@@ -627,7 +627,7 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
     const float x = x_of(t);
     dl->AddLine(ImVec2(x, y0), ImVec2(x, y1 + 3), grid);
     char label[32];
-    std::snprintf(label, sizeof label, "%g s", std::round(t / tstep) * tstep);
+    std::snprintf(label, sizeof label, "%g s", std::round(t / tstep) * tstep + 0.0);
     if (x + ImGui::CalcTextSize(label).x <= origin.x + size.x)
       dl->AddText(ImVec2(x + 2, y1 + 1), text, label);
   }

@@ -3,12 +3,93 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <iostream>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "inhand/app/commands.hpp"
 #include "inhand/app/gui.hpp"
 #include "inhand/core/error.hpp"
+
+namespace {
+
+// What `import` and `gui RECORDING` share: the options that say how to read the recording.
+std::vector<CLI::Option*> AddImportOptions(CLI::App* cmd, inhand::app::ImportCommand& im) {
+  std::vector<CLI::Option*> options;
+  options.push_back(
+      cmd->add_option("--hand", im.hand, "the hand's URDF (joint names are matched to it)"));
+  options.push_back(
+      cmd->add_option("--object", im.object, "the object model (object JSON or single-link URDF)"));
+  options.push_back(
+      cmd->add_option("--package", im.packages, "package:// resolution NAME=DIR (repeatable)"));
+  options.push_back(cmd->add_option("--joints", im.joints,
+                                    "sensor_msgs/JointState topic (default: the only one)"));
+  options.push_back(
+      cmd->add_option("--effort-is", im.effort_is,
+                      "external: JointState effort is the external joint torque; none: no torques")
+          ->capture_default_str());
+  options.push_back(cmd->add_option(
+      "--image", im.image, "sensor_msgs/Image or CompressedImage topic (default: the only one)"));
+  options.push_back(
+      cmd->add_flag("--no-images", im.no_images, "import joints (and ground truth) only"));
+  options.push_back(
+      cmd->add_option("--camera-info", im.camera_info,
+                      "sensor_msgs/CameraInfo topic (default: beside the image topic)"));
+  options.push_back(
+      cmd->add_option("--palm-frame", im.palm_frame,
+                      "TF frame of the URDF's root link (default: the root link's name)"));
+  options.push_back(cmd->add_option("--camera-frame", im.camera_frame,
+                                    "TF frame of the camera (default: the images' frame_id)"));
+  options.push_back(
+      cmd->add_option("--object-pose", im.object_pose,
+                      "ground truth: PoseStamped, TransformStamped or Odometry topic"));
+  options.push_back(
+      cmd->add_option("--initial-pose", im.initial_pose,
+                      "x,y,z,qw,qx,qy,qz in the palm frame (default: the first ground truth)"));
+  options.push_back(cmd->add_option("--initial-sigma", im.initial_sigma,
+                                    "POS_M,ORIENT_RAD,BIAS_RAD (default 0.02,0.087,0.087)"));
+  options.push_back(
+      cmd->add_option("--joint-stiffness", im.joint_stiffness,
+                      "elastic joints, N m/rad: K for every joint, or NAME=K,...[,*=K] (needs "
+                      "--effort-is external)"));
+  options.push_back(
+      cmd->add_option("--start", im.start, "seconds after the first joint sample to start at"));
+  options.push_back(
+      cmd->add_option("--end", im.end, "seconds after the first joint sample to end at"));
+  options.push_back(cmd->add_option(
+      "--time-origin", im.time_origin,
+      "stamp [s since the epoch] that becomes t = 0 (default: the first joint sample's)"));
+  return options;
+}
+
+// A folder with a session.json is a session; anything else is taken for a ROS recording.
+bool IsSession(const std::string& path) {
+  return std::filesystem::is_regular_file(std::filesystem::path(path) / "session.json");
+}
+
+// `gui RECORDING`: the recording imported as `import` would (with the same options) into a
+// temporary session, which goes when the GUI closes.
+int RunGuiOnRecording(inhand::app::GuiCommand gui, inhand::app::ImportCommand import) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("inhand-gui-" + std::to_string(::getpid()));
+  struct Remove {
+    fs::path dir;
+    ~Remove() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } remove{dir};
+  import.recording = gui.session;
+  import.out = dir.string();
+  import.overwrite = true;
+  if (const int code = inhand::app::RunImport(import); code != 0) return code;
+  gui.session = dir.string();
+  return inhand::app::RunGui(gui);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App cli{"inhand: in-hand object pose estimation and its visual debugger"};
@@ -77,41 +158,7 @@ int main(int argc, char** argv) {
                        "list the topics (type, count, rate) and the TF frames, and stop");
   import_cmd->add_option("--out", import.out, "session directory to write");
   import_cmd->add_flag("--overwrite", import.overwrite, "replace an existing session directory");
-  import_cmd->add_option("--hand", import.hand, "the hand's URDF (joint names are matched to it)");
-  import_cmd->add_option("--object", import.object,
-                         "the object model (object JSON or single-link URDF)");
-  import_cmd->add_option("--package", import.packages,
-                         "package:// resolution NAME=DIR (repeatable)");
-  import_cmd->add_option("--joints", import.joints,
-                         "sensor_msgs/JointState topic (default: the only one)");
-  import_cmd
-      ->add_option("--effort-is", import.effort_is,
-                   "external: JointState effort is the external joint torque; none: no torques")
-      ->capture_default_str();
-  import_cmd->add_option("--image", import.image,
-                         "sensor_msgs/Image or CompressedImage topic (default: the only one)");
-  import_cmd->add_flag("--no-images", import.no_images, "import joints (and ground truth) only");
-  import_cmd->add_option("--camera-info", import.camera_info,
-                         "sensor_msgs/CameraInfo topic (default: beside the image topic)");
-  import_cmd->add_option("--palm-frame", import.palm_frame,
-                         "TF frame of the URDF's root link (default: the root link's name)");
-  import_cmd->add_option("--camera-frame", import.camera_frame,
-                         "TF frame of the camera (default: the images' frame_id)");
-  import_cmd->add_option("--object-pose", import.object_pose,
-                         "ground truth: PoseStamped, TransformStamped or Odometry topic");
-  import_cmd->add_option("--initial-pose", import.initial_pose,
-                         "x,y,z,qw,qx,qy,qz in the palm frame (default: the first ground truth)");
-  import_cmd->add_option("--initial-sigma", import.initial_sigma,
-                         "POS_M,ORIENT_RAD,BIAS_RAD (default 0.02,0.087,0.087)");
-  import_cmd->add_option("--joint-stiffness", import.joint_stiffness,
-                         "elastic joints, N m/rad: K for every joint, or NAME=K,...[,*=K] (needs "
-                         "--effort-is external)");
-  import_cmd->add_option("--start", import.start,
-                         "seconds after the first joint sample to start at");
-  import_cmd->add_option("--end", import.end, "seconds after the first joint sample to end at");
-  import_cmd->add_option(
-      "--time-origin", import.time_origin,
-      "stamp [s since the epoch] that becomes t = 0 (default: the first joint sample's)");
+  AddImportOptions(import_cmd, import);
 
   inhand::app::ReplayCommand replay;
   auto* replay_cmd = cli.add_subcommand(
@@ -189,7 +236,11 @@ int main(int argc, char** argv) {
   auto* gui_cmd = cli.add_subcommand(
       "gui",
       "Interactive session (Dear ImGui) when a display exists; --screenshot renders offscreen");
-  gui_cmd->add_option("SESSION", gui.session, "session directory")->required();
+  gui_cmd
+      ->add_option("SESSION", gui.session,
+                   "session directory, or a ROS recording (.bag, .mcap, .db3 or a ROS 2 bag "
+                   "folder) imported first with the import options (--hand, --object, ...)")
+      ->required();
   gui_cmd->add_option("--params", gui.params,
                       "tracker parameters (JSON, as written to params.json)");
   gui_cmd->add_option(
@@ -202,6 +253,8 @@ int main(int argc, char** argv) {
   gui_cmd->add_option("--script", gui.script,
                       "run FILE's inputs and checks (seek, key, click, wait, screenshot, expect), "
                       "then quit; exit 1 when a check fails");
+  inhand::app::ImportCommand gui_import;
+  const std::vector<CLI::Option*> gui_import_options = AddImportOptions(gui_cmd, gui_import);
 
   try {
     cli.parse(argc, argv);
@@ -216,7 +269,16 @@ int main(int argc, char** argv) {
     if (*replay_cmd) return inhand::app::RunReplay(replay);
     if (*tags_cmd) return inhand::app::RunTags(tags);
     if (*match_cmd) return inhand::app::RunMatch(match);
-    if (*gui_cmd) return inhand::app::RunGui(gui);
+    if (*gui_cmd) {
+      if (IsSession(gui.session)) {
+        for (const CLI::Option* o : gui_import_options)
+          if (o->count() > 0)
+            throw inhand::InputError(o->get_name() + " is an import option, but " + gui.session +
+                                     " is a session (a folder with session.json), not a recording");
+        return inhand::app::RunGui(gui);
+      }
+      return RunGuiOnRecording(gui, gui_import);
+    }
     if (*evaluate_cmd) {
       char self[4096];
       const ssize_t n = ::readlink("/proc/self/exe", self, sizeof(self) - 1);

@@ -64,7 +64,7 @@ TimelineStripPainter::TimelineStripPainter(const TimelineStrip& strip, int width
     const int x = x_of(t);
     cv::line(img, cv::Point(x, kAxis - 4), cv::Point(x, lanes_end), kGrid, 1);
     char label[32];
-    std::snprintf(label, sizeof label, "%g s", std::round(t / step) * step);
+    std::snprintf(label, sizeof label, "%g s", std::round(t / step) * step + 0.0);  // not -0
     if (x + 2 + TextWidth(label) <= width) Text(img, label, x + 2, kAxis - 6, kText);
   }
   for (int i = 0; i < lanes; ++i) {

@@ -291,6 +291,60 @@ TEST(Import, BadInputIsOneClearLineAndNoOutput) {
     EXPECT_EQ(e.path().filename().string().find(".out"), std::string::npos) << e.path();
 }
 
+#ifdef INHAND_WITH_GUI
+// `inhand gui RECORDING` imports it with import's options into a session of its own, opens it and
+// removes that session when it closes; import's options beside a session are refused.
+TEST(Import, TheGuiOpensARecordingDirectly) {
+  test::TempDir dir;
+  const auto sessions_left = [] {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(fs::temp_directory_path()))
+      n += e.path().filename().string().rfind("inhand-gui-", 0) == 0;
+    return n;
+  };
+  const int before = sessions_left();
+  const std::string options = " --hand " + kHand + " --object " + kObject +
+                              " --image /camera/image_raw --object-pose /mocap/object"
+                              " --effort-is external";
+  // The whole session's events known, at 0.5 s: the same window as for the session imported
+  // first.
+  dir.Write("look.txt",
+            "wait-events\nseek 0.5\nwait 2\nexpect time 0.5 0.003\n"
+            "expect events any 1\nscreenshot " +
+                (dir / "gui.png") + "\n");
+  const test::CommandResult r = test::RunInhand(
+      "gui " + Fixture("synthetic.mcap") + options + " --script " + (dir / "look.txt"),
+      "env -u DISPLAY");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("199 samples"), std::string::npos) << r.output;  // import's report
+  EXPECT_EQ(sessions_left(), before);
+  ASSERT_EQ(test::RunInhand(Import(Fixture("synthetic.mcap"), dir / "s",
+                                   "--image /camera/image_raw --object-pose /mocap/object "
+                                   "--effort-is external"))
+                .exit_code,
+            0);
+  dir.Write("look2.txt",
+            "wait-events\nseek 0.5\nwait 2\nscreenshot " + (dir / "session.png") + "\n");
+  const test::CommandResult imported =
+      test::RunInhand("gui " + (dir / "s") + " --script " + (dir / "look2.txt"), "env -u DISPLAY");
+  ASSERT_EQ(imported.exit_code, 0) << imported.output;
+  const test::CommandResult same =
+      test::RunInhand("compare " + (dir / "gui.png") + " " + (dir / "session.png") +
+                      " --max-channel-delta 0 --max-bad-fraction 0");
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  // Import's options apply to recordings only; a recording that is not there is named.
+  const test::CommandResult session =
+      test::RunInhand("gui " + (dir / "s") + " --hand " + kHand + " --frames 1");
+  EXPECT_EQ(session.exit_code, 2);
+  EXPECT_NE(session.output.find("--hand is an import option"), std::string::npos) << session.output;
+  const test::CommandResult missing =
+      test::RunInhand("gui " + (dir / "none.bag") + options + " --frames 1");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.output.find("none.bag"), std::string::npos) << missing.output;
+  EXPECT_EQ(sessions_left(), before);
+}
+#endif
+
 // The TF tree on its own: composition along both branches, interpolation, and the error that
 // names the two parts of a split tree.
 TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
