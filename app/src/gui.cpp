@@ -64,8 +64,10 @@ struct GuiState {
   bool pictures_dirty = true;
   // The whole session's events and series (SessionOverview), and how far they are known.
   SessionOverview::Data overview;
-  long overview_version = -1;     // -1: copy whatever the overview has
-  bool timeline_contacts = true;  // contact events on the timeline and in [ ] jumps
+  long overview_version = -1;  // -1: copy whatever the overview has
+  bool timeline_contacts = true;
+  int error_axis = 0;  // the Errors tab: 0 norms and largest axes, 1-3 the object frame's x, y, z
+                       // // contact events on the timeline and in [ ] jumps
   ImGuiTextFilter event_filter;
   double event_list_t = -1.0;  // [s] the time the event list last scrolled to
   // The time window the timeline and the plots share [s] (NaN: the whole session).
@@ -552,14 +554,26 @@ void DrawTimeline(Runner& runner, GuiState& state, float width) {
 // to seek, wheel and right drag to zoom and pan (ZoomAndPan). `cap`: values above it are drawn at
 // it (the axis says so). Each pixel column draws its samples' minimum and maximum, so a long
 // session costs the window's width, not its samples.
+// One of a set's series in the overview.
+using Series = std::function<const std::vector<float>&(const SessionOverview::Set&)>;
+Series Member(std::vector<float> SessionOverview::Set::*m) {
+  return [m](const SessionOverview::Set& s) -> const std::vector<float>& { return s.*m; };
+}
+Series Axis(std::array<std::vector<float>, 3> SessionOverview::Set::*m, int axis) {
+  return [m, axis](const SessionOverview::Set& s) -> const std::vector<float>& {
+    return (s.*m)[static_cast<std::size_t>(axis)];
+  };
+}
+
 struct PlotSpec {
   const char* id;
-  const char* title;
+  std::string title;
   const char* unit;
-  std::vector<float> SessionOverview::Set::*series;
+  Series series;
   double band_lo = NAN, band_hi = NAN;  // a shaded band
   double line = NAN;                    // a dashed threshold
   double cap = NAN;
+  Series envelope = nullptr;  // drawn as ± this about zero, faint, in each set's colour
 };
 
 void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size);
@@ -598,10 +612,14 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
                     b = static_cast<std::size_t>(last - data.t.begin());
   double lo = 0.0, hi = 0.0;
   for (std::size_t i = 0; i < data.sets.size(); ++i)
-    for (std::size_t k = a; k < b && k < (data.sets[i].*spec.series).size() && !state.Hidden(i);
+    for (std::size_t k = a; k < b && k < spec.series(data.sets[i]).size() && !state.Hidden(i);
          ++k) {
-      const double v = (data.sets[i].*spec.series)[k];
+      const double v = spec.series(data.sets[i])[k];
       if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+      if (spec.envelope && k < spec.envelope(data.sets[i]).size()) {
+        const double e = spec.envelope(data.sets[i])[k];
+        if (std::isfinite(e)) lo = std::min(lo, -e), hi = std::max(hi, e);
+      }
     }
   if (std::isfinite(spec.line)) hi = std::max(hi, spec.line);
   if (std::isfinite(spec.band_hi)) hi = std::max(hi, spec.band_hi);
@@ -633,8 +651,8 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
   }
   // The title, the unit and the legend.
   char title[160];
-  std::snprintf(title, sizeof title, "%s%s%s%s%s", spec.title, *spec.unit ? " [" : "", spec.unit,
-                *spec.unit ? "]" : "", capped ? " (top clipped)" : "");
+  std::snprintf(title, sizeof title, "%s%s%s%s%s", spec.title.c_str(), *spec.unit ? " [" : "",
+                spec.unit, *spec.unit ? "]" : "", capped ? " (top clipped)" : "");
   dl->AddText(ImVec2(x0, origin.y + 1), IM_COL32(220, 220, 230, 255), title);
   float lx = x0 + ImGui::CalcTextSize(title).x + 14;
   for (std::size_t i = 0; i < p.sets().size(); ++i) {
@@ -657,8 +675,26 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
   std::vector<ImVec2> points;
   for (std::size_t i = 0; i < data.sets.size() && i < p.sets().size(); ++i) {
     if (state.Hidden(i)) continue;
-    const std::vector<float>& y = data.sets[i].*spec.series;
     const Rgb& c = p.sets()[i].colour;
+    if (spec.envelope) {  // ±σ: thin and faint, per pixel column its largest
+      const std::vector<float>& e = spec.envelope(data.sets[i]);
+      for (const float sign : {1.0f, -1.0f}) {
+        points.clear();
+        int column = -1;
+        for (std::size_t k = a; k < std::min(b, e.size()); ++k) {
+          const int col = static_cast<int>(std::floor(x_of(data.t[k]) - x0));
+          const float y = y_of(sign * e[k]);
+          if (col != column)
+            points.emplace_back(x0 + static_cast<float>(col), y), column = col;
+          else if (sign * (points.back().y - y) > 0)  // farther from zero
+            points.back().y = y;
+        }
+        if (points.size() > 1)
+          dl->AddPolyline(points.data(), static_cast<int>(points.size()),
+                          IM_COL32(c.r, c.g, c.b, 120), 0, 1.0f);
+      }
+    }
+    const std::vector<float>& y = spec.series(data.sets[i]);
     points.clear();
     int column = -1;
     float cmin = 0, cmax = 0;
@@ -713,8 +749,15 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
     ImGui::Text("%.3f s", data.t[k]);
     for (std::size_t i = 0; i < data.sets.size() && i < p.sets().size(); ++i) {
       if (state.Hidden(i)) continue;
-      const std::vector<float>& y = data.sets[i].*spec.series;
+      const std::vector<float>& y = spec.series(data.sets[i]);
       const Rgb& c = p.sets()[i].colour;
+      if (spec.envelope) {
+        const std::vector<float>& e = spec.envelope(data.sets[i]);
+        ImGui::TextColored(ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f),
+                           "%-4s %.3g %s (sigma %.3g)", p.sets()[i].name.c_str(),
+                           k < y.size() ? y[k] : NAN, spec.unit, k < e.size() ? e[k] : NAN);
+        continue;
+      }
       ImGui::TextColored(ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f), "%-4s %.3g %s",
                          p.sets()[i].name.c_str(), k < y.size() ? y[k] : NAN, spec.unit);
     }
@@ -731,18 +774,41 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
 void DrawErrorPlots(Runner& runner, GuiState& state, float avail) {
   using Set = SessionOverview::Set;
   const bool truth = runner.session().has_groundtruth();
+  // The errors and σ as norms and largest axes, or signed along one axis of the object frame with
+  // ±σ about them.
+  const char* axes[] = {"norm / largest axis", "object x", "object y", "object z"};
+  ImGui::SetNextItemWidth(180);
+  ImGui::Combo("errors and sigma", &state.error_axis, axes, 4);
+  const int a = state.error_axis - 1;
   std::vector<PlotSpec> plots;
-  if (truth) {
-    plots.push_back({"##pe", "position error", "mm", &Set::position_error});
-    plots.push_back({"##oe", "orientation error", "deg", &Set::orientation_error});
+  if (a < 0) {
+    if (truth) {
+      plots.push_back({"##pe", "position error", "mm", Member(&Set::position_error)});
+      plots.push_back({"##oe", "orientation error", "deg", Member(&Set::orientation_error)});
+    }
+    plots.push_back({"##sp", "position sigma, largest axis", "mm", Member(&Set::sigma_position)});
+    plots.push_back(
+        {"##so", "orientation sigma, largest axis", "deg", Member(&Set::sigma_orientation)});
+  } else {
+    const std::string along = std::string(", ") + axes[state.error_axis];
+    const std::string about = along;
+    if (truth) {
+      plots.push_back({"##pe", "position error" + along + " (faint: +-sigma)", "mm",
+                       Axis(&Set::position_error_axis, a)});
+      plots.back().envelope = Axis(&Set::sigma_position_axis, a);
+      plots.push_back({"##oe", "orientation error" + about + " (faint: +-sigma)", "deg",
+                       Axis(&Set::orientation_error_axis, a)});
+      plots.back().envelope = Axis(&Set::sigma_orientation_axis, a);
+    }
+    plots.push_back({"##sp", "position sigma" + along, "mm", Axis(&Set::sigma_position_axis, a)});
+    plots.push_back(
+        {"##so", "orientation sigma" + about, "deg", Axis(&Set::sigma_orientation_axis, a)});
   }
-  plots.push_back({"##sp", "position sigma, largest axis", "mm", &Set::sigma_position});
-  plots.push_back({"##so", "orientation sigma, largest axis", "deg", &Set::sigma_orientation});
   if (truth)
-    plots.push_back({"##nees", "NEES, chi2(6) 95% band, 99% line", "", &Set::nees, 1.237, 14.449,
-                     16.812, 60.0});
+    plots.push_back({"##nees", "NEES, chi2(6) 95% band, 99% line", "", Member(&Set::nees), 1.237,
+                     14.449, 16.812, 60.0});
   plots.push_back({"##pen", "deepest link inside the estimate (5 mm: inconsistent)", "mm",
-                   &Set::penetration, NAN, NAN, state.params.health.penetration * 1000});
+                   Member(&Set::penetration), NAN, NAN, state.params.health.penetration * 1000});
   const float spacing = ImGui::GetStyle().ItemSpacing.x;
   const ImVec2 size((avail - spacing) / 2, 104);
   for (std::size_t i = 0; i < plots.size(); ++i) {
@@ -756,12 +822,12 @@ void DrawErrorPlots(Runner& runner, GuiState& state, float avail) {
 void DrawCountPlots(Runner& runner, GuiState& state, float avail) {
   using Set = SessionOverview::Set;
   const std::vector<PlotSpec> plots = {
-      {"##constraints", "contact constraints applied", "", &Set::constraints},
-      {"##gated", "measurements gated (contacts, vision)", "", &Set::gated},
+      {"##constraints", "contact constraints applied", "", Member(&Set::constraints)},
+      {"##gated", "measurements gated (contacts, vision)", "", Member(&Set::gated)},
       {"##innovation", "vision: mean Mahalanobis distance of the last image", "",
-       &Set::visual_mahalanobis},
+       Member(&Set::visual_mahalanobis)},
       {"##unexplained", "joint torque the contacts leave unexplained", "N m",
-       &Set::unexplained_torque}};
+       Member(&Set::unexplained_torque)}};
   const float spacing = ImGui::GetStyle().ItemSpacing.x;
   const ImVec2 size((avail - spacing) / 2, 104);
   for (std::size_t i = 0; i < plots.size(); ++i) {

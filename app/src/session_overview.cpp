@@ -1,5 +1,6 @@
 #include "inhand/app/session_overview.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -22,6 +23,11 @@ constexpr std::vector<float> Set::*kSeries[] = {&Set::position_error,
                                                 &Set::gated,
                                                 &Set::visual_mahalanobis,
                                                 &Set::unexplained_torque};
+
+// The same for the per-axis series, each axis a series.
+constexpr std::array<std::vector<float>, 3> Set::*kAxisSeries[] = {
+    &Set::position_error_axis, &Set::orientation_error_axis, &Set::sigma_position_axis,
+    &Set::sigma_orientation_axis};
 
 template <typename T>
 void AppendFrom(const std::vector<T>& from, std::vector<T>& to, std::size_t have) {
@@ -59,6 +65,8 @@ long SessionOverview::Read(long version, Data& data) const {
     Set& to = data.sets[i];
     AppendFrom(from.events, to.events, to.events.size());
     for (auto series : kSeries) AppendFrom(from.*series, to.*series, have);
+    for (auto series : kAxisSeries)
+      for (std::size_t a = 0; a < 3; ++a) AppendFrom((from.*series)[a], (to.*series)[a], have);
   }
   return version_;
 }
@@ -80,10 +88,13 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         Set& to = data_.sets[i];
         to.events.insert(to.events.end(), from.events.begin(), from.events.end());
         from.events.clear();
-        for (auto series : kSeries) {
-          (to.*series).insert((to.*series).end(), (from.*series).begin(), (from.*series).end());
-          (from.*series).clear();
-        }
+        const auto move = [](std::vector<float>& source, std::vector<float>& target) {
+          target.insert(target.end(), source.begin(), source.end());
+          source.clear();
+        };
+        for (auto series : kSeries) move(from.*series, to.*series);
+        for (auto series : kAxisSeries)
+          for (std::size_t a = 0; a < 3; ++a) move((from.*series)[a], (to.*series)[a]);
       }
       data_.progress.t = session.t(k);
       data_.progress.share = n > 1 ? static_cast<double>(k) / (n - 1) : 1.0;
@@ -113,6 +124,21 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         s.gated.push_back(static_cast<float>(r.gated));
         s.visual_mahalanobis.push_back(static_cast<float>(r.visual_mahalanobis));
         s.unexplained_torque.push_back(static_cast<float>(r.unexplained_torque));
+        const Mat6 P = player.tracker(i).filter().covariance().topLeftCorner<6, 6>();
+        const Mat3 R = r.T_PO.linear();
+        const Vec3 var_p = (R.transpose() * P.topLeftCorner<3, 3>() * R).diagonal();
+        const Vec3 var_o = (R.transpose() * P.bottomRightCorner<3, 3>() * R).diagonal();
+        for (int a = 0; a < 3; ++a) {
+          const auto at = static_cast<std::size_t>(a);
+          s.position_error_axis[at].push_back(
+              static_cast<float>(truth ? r.position_error_O[a] * 1000 : kNaN));
+          s.orientation_error_axis[at].push_back(
+              static_cast<float>(truth ? r.orientation_error_O[a] * 180 / M_PI : kNaN));
+          s.sigma_position_axis[at].push_back(
+              static_cast<float>(std::sqrt(std::max(0.0, var_p[a])) * 1000));
+          s.sigma_orientation_axis[at].push_back(
+              static_cast<float>(std::sqrt(std::max(0.0, var_o[a])) * 180 / M_PI));
+        }
       }
       if (k % kPublish == kPublish - 1 && k != n - 1) publish(k, false);
     }

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -96,7 +97,7 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
     std::string line;
     std::getline(in, line);
     std::map<std::string, std::size_t> row;
-    double worst = 0.0;
+    double worst = 0.0, worst_trace = 0.0;
     while (std::getline(in, line)) {
       std::vector<std::string> f;
       std::stringstream ss(line);
@@ -108,8 +109,23 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
       worst = std::max(worst, std::abs(std::stod(f.at(15)) - data.sets[i].position_error[k]));
       const double sigma = std::max({std::stod(f[9]), std::stod(f[10]), std::stod(f[11])}) * 1000;
       worst = std::max(worst, std::abs(sigma - data.sets[i].sigma_position[k]));
+      // Per axis of the object frame: the errors make the norm; the σ along the object's axes
+      // and estimates.csv's along the palm's have the same sum of squares (P's trace).
+      const app::SessionOverview::Set& o = data.sets[i];
+      double e2 = 0.0, p2 = 0.0, r2 = 0.0, p2_palm = 0.0, r2_palm = 0.0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        e2 += std::pow(o.position_error_axis[a][k], 2);
+        p2 += std::pow(o.sigma_position_axis[a][k], 2);
+        r2 += std::pow(o.sigma_orientation_axis[a][k], 2);
+        p2_palm += std::pow(std::stod(f[9 + a]) * 1000, 2);
+        r2_palm += std::pow(std::stod(f[12 + a]) * 180 / M_PI, 2);
+      }
+      worst = std::max(worst, std::abs(std::sqrt(e2) - o.position_error[k]));
+      worst_trace = std::max(
+          {worst_trace, std::abs(p2 - p2_palm) / p2_palm, std::abs(r2 - r2_palm) / r2_palm});
     }
-    EXPECT_LT(worst, 1e-3);  // float
+    EXPECT_LT(worst, 1e-3);        // float
+    EXPECT_LT(worst_trace, 1e-5);  // float, and estimates.csv's printed digits
   }
   // summary.json's per-set means of the counts and the unexplained torque.
   {

@@ -3,6 +3,7 @@
 // replays the session on a background thread, without pictures, and publishes what it has found so
 // far — every set's events (tracker/events.hpp) and, per joint sample, the series the plots draw.
 // The GUI's own player only knows the session up to the time shown.
+#include <array>
 #include <atomic>
 #include <mutex>
 #include <string>
@@ -40,6 +41,12 @@ class SessionOverview {
     std::vector<float> gated;        // measurement blocks the gates rejected (contacts, vision)
     std::vector<float> visual_mahalanobis;  // mean over the last image's features
     std::vector<float> unexplained_torque;  // [N m] sets with torques
+    // Per axis of the object frame: the signed error (estimate − truth, EstimateRecord::
+    // position_error_O, orientation_error_O; NaN without truth) and the σ along that axis
+    // (√ of the diagonal of R̂ᵀ P R̂, P's position and orientation blocks, R̂ the estimate's
+    // orientation): along and about a bottle's axis apart from across it.
+    std::array<std::vector<float>, 3> position_error_axis, orientation_error_axis;  // [mm], [deg]
+    std::array<std::vector<float>, 3> sigma_position_axis, sigma_orientation_axis;  // [mm], [deg]
   };
   struct Data {
     std::vector<double> t;  // [s] the samples replayed
