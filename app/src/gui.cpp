@@ -66,7 +66,9 @@ struct GuiState {
   SessionOverview::Data overview;
   long overview_version = -1;  // -1: copy whatever the overview has
   bool timeline_contacts = true;
-  int error_axis = 0;  // the Errors tab: 0 norms and largest axes, 1-3 the object frame's x, y, z
+  int error_axis = 0;
+  int bias_joint = 0;  // the Biases and counts tab's joint (configuration order)  // the Errors
+                       // tab: 0 norms and largest axes, 1-3 the object frame's x, y, z
                        // // contact events on the timeline and in [ ] jumps
   ImGuiTextFilter event_filter;
   double event_list_t = -1.0;  // [s] the time the event list last scrolled to
@@ -818,16 +820,40 @@ void DrawErrorPlots(Runner& runner, GuiState& state, float avail) {
   if (!truth) ImGui::TextUnformatted("no ground truth: errors and NEES are not known");
 }
 
-// What each set fused and refused, every set in one plot per quantity, over the shared window.
+// A joint's bias with its σ, and what each set fused and refused, every set in one plot per
+// quantity, over the shared window.
 void DrawCountPlots(Runner& runner, GuiState& state, float avail) {
   using Set = SessionOverview::Set;
-  const std::vector<PlotSpec> plots = {
+  const std::vector<std::string> joints = runner.player().models().hand.QNames();
+  state.bias_joint = std::clamp(state.bias_joint, 0, static_cast<int>(joints.size()) - 1);
+  ImGui::SetNextItemWidth(180);
+  if (ImGui::BeginCombo("joint",
+                        joints.empty() ? "" : joints[std::size_t(state.bias_joint)].c_str())) {
+    for (int j = 0; j < static_cast<int>(joints.size()); ++j)
+      if (ImGui::Selectable(joints[static_cast<std::size_t>(j)].c_str(), j == state.bias_joint))
+        state.bias_joint = j;
+    ImGui::EndCombo();
+  }
+  const std::size_t j = static_cast<std::size_t>(state.bias_joint);
+  static const std::vector<float> kNone;
+  const auto per_joint = [j](std::vector<std::vector<float>> Set::*m) -> Series {
+    return [m, j](const Set& s) -> const std::vector<float>& {
+      return j < (s.*m).size() ? (s.*m)[j] : kNone;
+    };
+  };
+  std::vector<PlotSpec> plots = {
+      {"##bias", "bias of " + (joints.empty() ? std::string() : joints[j]) + " (faint: +-sigma)",
+       "deg", per_joint(&Set::bias)},
+      {"##force", "contact forces from the torques, summed", "N", Member(&Set::contact_force)},
       {"##constraints", "contact constraints applied", "", Member(&Set::constraints)},
       {"##gated", "measurements gated (contacts, vision)", "", Member(&Set::gated)},
+      {"##cinnovation", "contacts: mean Mahalanobis distance of the constraints", "",
+       Member(&Set::contact_mahalanobis)},
       {"##innovation", "vision: mean Mahalanobis distance of the last image", "",
        Member(&Set::visual_mahalanobis)},
       {"##unexplained", "joint torque the contacts leave unexplained", "N m",
        Member(&Set::unexplained_torque)}};
+  plots.front().envelope = per_joint(&Set::sigma_bias);
   const float spacing = ImGui::GetStyle().ItemSpacing.x;
   const ImVec2 size((avail - spacing) / 2, 104);
   for (std::size_t i = 0; i < plots.size(); ++i) {

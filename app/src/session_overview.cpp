@@ -22,7 +22,9 @@ constexpr std::vector<float> Set::*kSeries[] = {&Set::position_error,
                                                 &Set::constraints,
                                                 &Set::gated,
                                                 &Set::visual_mahalanobis,
-                                                &Set::unexplained_torque};
+                                                &Set::unexplained_torque,
+                                                &Set::contact_mahalanobis,
+                                                &Set::contact_force};
 
 // The same for the per-axis series, each axis a series.
 constexpr std::array<std::vector<float>, 3> Set::*kAxisSeries[] = {
@@ -67,6 +69,11 @@ long SessionOverview::Read(long version, Data& data) const {
     for (auto series : kSeries) AppendFrom(from.*series, to.*series, have);
     for (auto series : kAxisSeries)
       for (std::size_t a = 0; a < 3; ++a) AppendFrom((from.*series)[a], (to.*series)[a], have);
+    for (auto series : {&Set::bias, &Set::sigma_bias}) {
+      (to.*series).resize((from.*series).size());
+      for (std::size_t j = 0; j < (from.*series).size(); ++j)
+        AppendFrom((from.*series)[j], (to.*series)[j], have);
+    }
   }
   return version_;
 }
@@ -95,6 +102,11 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         for (auto series : kSeries) move(from.*series, to.*series);
         for (auto series : kAxisSeries)
           for (std::size_t a = 0; a < 3; ++a) move((from.*series)[a], (to.*series)[a]);
+        for (auto series : {&Set::bias, &Set::sigma_bias}) {
+          (to.*series).resize((from.*series).size());
+          for (std::size_t j = 0; j < (from.*series).size(); ++j)
+            move((from.*series)[j], (to.*series)[j]);
+        }
       }
       data_.progress.t = session.t(k);
       data_.progress.share = n > 1 ? static_cast<double>(k) / (n - 1) : 1.0;
@@ -124,7 +136,28 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         s.gated.push_back(static_cast<float>(r.gated));
         s.visual_mahalanobis.push_back(static_cast<float>(r.visual_mahalanobis));
         s.unexplained_torque.push_back(static_cast<float>(r.unexplained_torque));
-        const Mat6 P = player.tracker(i).filter().covariance().topLeftCorner<6, 6>();
+        const Filter& filter = player.tracker(i).filter();
+        double mahalanobis = 0.0, force = 0.0;
+        int constraints = 0;
+        for (const FilterTrace::Contact& c : filter.trace().contacts) {
+          const bool constraint =
+              !c.gated && (c.kind == ContactKind::kKinematic || c.kind == ContactKind::kTorque);
+          if (constraint) mahalanobis += c.mahalanobis, ++constraints;
+          if (c.kind == ContactKind::kTorque) force += c.force_P.norm();
+        }
+        s.contact_mahalanobis.push_back(
+            static_cast<float>(constraints > 0 ? mahalanobis / constraints : kNaN));
+        s.contact_force.push_back(static_cast<float>(force));
+        const auto cov = filter.covariance();
+        s.bias.resize(static_cast<std::size_t>(r.biases.size()));
+        s.sigma_bias.resize(s.bias.size());
+        for (long j = 0; j < r.biases.size(); ++j) {
+          const auto at = static_cast<std::size_t>(j);
+          s.bias[at].push_back(static_cast<float>(r.biases[j] * 180 / M_PI));
+          s.sigma_bias[at].push_back(
+              static_cast<float>(std::sqrt(std::max(0.0, cov(6 + j, 6 + j))) * 180 / M_PI));
+        }
+        const Mat6 P = filter.covariance().topLeftCorner<6, 6>();
         const Mat3 R = r.T_PO.linear();
         const Vec3 var_p = (R.transpose() * P.topLeftCorner<3, 3>() * R).diagonal();
         const Vec3 var_o = (R.transpose() * P.bottomRightCorner<3, 3>() * R).diagonal();

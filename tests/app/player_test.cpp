@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -98,6 +99,7 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
     std::getline(in, line);
     std::map<std::string, std::size_t> row;
     double worst = 0.0, worst_trace = 0.0;
+    std::array<double, 2> forces{};
     while (std::getline(in, line)) {
       std::vector<std::string> f;
       std::stringstream ss(line);
@@ -121,6 +123,17 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
         r2_palm += std::pow(std::stod(f[12 + a]) * 180 / M_PI, 2);
       }
       worst = std::max(worst, std::abs(std::sqrt(e2) - o.position_error[k]));
+      // Each joint's bias as estimates.csv gives it (after the 22 fixed columns), its σ within
+      // the session's initial one.
+      ASSERT_EQ(o.bias.size(), f.size() - 22);
+      for (std::size_t j = 0; j < o.bias.size(); ++j) {
+        worst = std::max(worst, std::abs(std::stod(f[22 + j]) * 180 / M_PI - o.bias[j][k]));
+        EXPECT_GT(o.sigma_bias[j][k], 0.0f);
+        EXPECT_LE(o.sigma_bias[j][k], session.info().sigma_joint_bias * 180 / M_PI * (1 + 1e-6));
+      }
+      // A Mahalanobis distance of the contacts exactly where constraints were applied.
+      EXPECT_EQ(std::isfinite(o.contact_mahalanobis[k]), o.constraints[k] > 0) << k;
+      forces[i] += o.contact_force[k];
       worst_trace = std::max(
           {worst_trace, std::abs(p2 - p2_palm) / p2_palm, std::abs(r2 - r2_palm) / r2_palm});
     }

@@ -39,14 +39,18 @@ class SessionOverview {
     std::vector<float> penetration;  // [mm] the deepest link inside the estimate
     std::vector<float> constraints;  // contact blocks applied
     std::vector<float> gated;        // measurement blocks the gates rejected (contacts, vision)
-    std::vector<float> visual_mahalanobis;  // mean over the last image's features
-    std::vector<float> unexplained_torque;  // [N m] sets with torques
+    std::vector<float> visual_mahalanobis;   // mean over the last image's features
+    std::vector<float> unexplained_torque;   // [N m] sets with torques
+    std::vector<float> contact_mahalanobis;  // mean over the step's contact constraints
+    std::vector<float> contact_force;        // [N] the torque contacts' forces, summed
     // Per axis of the object frame: the signed error (estimate − truth, EstimateRecord::
     // position_error_O, orientation_error_O; NaN without truth) and the σ along that axis
     // (√ of the diagonal of R̂ᵀ P R̂, P's position and orientation blocks, R̂ the estimate's
     // orientation): along and about a bottle's axis apart from across it.
     std::array<std::vector<float>, 3> position_error_axis, orientation_error_axis;  // [mm], [deg]
     std::array<std::vector<float>, 3> sigma_position_axis, sigma_orientation_axis;  // [mm], [deg]
+    // Per joint (the hand's configuration order): its estimated bias and the bias's σ [deg].
+    std::vector<std::vector<float>> bias, sigma_bias;
   };
   struct Data {
     std::vector<double> t;  // [s] the samples replayed
