@@ -19,6 +19,7 @@
 #include <exception>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <iostream>
 #include <limits>
 #include <map>
@@ -102,19 +103,34 @@ class Runner {
   // Deterministic: going back resumes from the nearest checkpoint at or before k (the run from
   // there is bit-identical to the first), so a seek never drifts and recomputes at most
   // CheckpointEvery() samples.
+  // Forward too: from the overview's checkpoints where this player has not been yet, so a seek
+  // anywhere steps at most CheckpointEvery() samples once the overview has passed there.
   void StepTo(int k) {
     k = std::clamp(k, 0, session_.num_samples() - 1);
-    if (k < next_ - 1) {
-      auto it = checkpoints_.upper_bound(k + 1);  // first checkpoint after the wanted one
-      if (it == checkpoints_.begin()) {
-        Restart();
-      } else {
-        --it;
-        player_->Restore(it->second.player);
-        next_ = it->first;
-        last_frame_ = it->second.last_frame;
-        state_.pictures_dirty = true;
-      }
+    const bool back = k < next_ - 1;
+    // The latest checkpoint resuming at or before k + 1 (after next_ unless going back).
+    const int after = back ? -1 : next_;
+    int resume = -1;
+    auto it = checkpoints_.upper_bound(k + 1);
+    if (it != checkpoints_.begin() && std::prev(it)->first > after) resume = std::prev(it)->first;
+    SessionPlayer::Checkpoint from_overview;
+    int overview_resume = -1, overview_frame = -1;
+    if (overview_ && overview_->CheckpointIn(std::max(after, resume), k + 1, overview_resume,
+                                             from_overview, overview_frame)) {
+      player_->Restore(from_overview);
+      next_ = overview_resume;
+      last_frame_ = overview_frame;
+      state_.pictures_dirty = true;
+      if (!checkpoints_.count(next_))
+        checkpoints_.emplace(next_, RunnerCheckpoint{std::move(from_overview), last_frame_});
+    } else if (resume >= 0) {
+      const RunnerCheckpoint& c = checkpoints_.at(resume);
+      player_->Restore(c.player);
+      next_ = resume;
+      last_frame_ = c.last_frame;
+      state_.pictures_dirty = true;
+    } else if (back) {
+      Restart();
     }
     while (next_ <= k) {
       player_->Step(next_);
@@ -161,7 +177,7 @@ class Runner {
   int last_frame_ = -1;
   // Keyed by the sample the run resumes at. A checkpoint holds the last camera and virtual
   // images (a few MB): every 250 samples (0.5 s at 500 Hz), at most ~50 per session.
-  int CheckpointEvery() const { return std::max(250, session_.num_samples() / 50); }
+  int CheckpointEvery() const { return SessionOverview::CheckpointEvery(session_.num_samples()); }
   struct RunnerCheckpoint {
     SessionPlayer::Checkpoint player;
     int last_frame;
@@ -1225,6 +1241,51 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   DrawHelp(state, width, height);
 }
 
+// What the held-to figures need, logged at the end of a run: the time a seek takes (from the
+// action to the picture uploaded) and how fast playback goes against the session's clock.
+class Timings {
+ public:
+  // Around one frame's actions and picture update.
+  void Begin(const GuiState& state, double session_t) {
+    seek_ = std::any_of(state.actions.begin(), state.actions.end(),
+                        [](const Action& a) { return a.kind == ActionKind::kSeek; });
+    playing_ = state.playing;
+    t0_ = session_t;
+    start_ = std::chrono::steady_clock::now();
+  }
+  void End(double session_t) {
+    const auto now = std::chrono::steady_clock::now();
+    if (seek_) seek_ms_.push_back(std::chrono::duration<double, std::milli>(now - start_).count());
+    if (playing_ && was_playing_) {
+      played_session_ += session_t - t0_;
+      played_wall_ += std::chrono::duration<double>(now - last_end_).count();
+    }
+    was_playing_ = playing_;
+    last_end_ = now;
+  }
+  // ", seeks N (median A ms, slowest B ms), playback R x real time"; empty when neither.
+  std::string Report() const {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1);
+    if (!seek_ms_.empty()) {
+      std::vector<double> v = seek_ms_;
+      std::sort(v.begin(), v.end());
+      out << ", seeks " << v.size() << " (median " << v[v.size() / 2] << " ms, slowest " << v.back()
+          << " ms)";
+    }
+    if (played_wall_ > 0.0)
+      out << ", playback " << std::setprecision(2) << played_session_ / played_wall_
+          << "x real time";
+    return out.str();
+  }
+
+ private:
+  bool seek_ = false, playing_ = false, was_playing_ = false;
+  double t0_ = 0.0, played_session_ = 0.0, played_wall_ = 0.0;
+  std::chrono::steady_clock::time_point start_, last_end_;
+  std::vector<double> seek_ms_;
+};
+
 int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, GuiState& state,
                 GuiScript* script) {
   OSMesaContext ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
@@ -1256,9 +1317,13 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
     return img;
   };
   int f = 0;
+  Timings timings;
+  const auto now_t = [&] { return runner.session().t(std::max(0, runner.sample())); };
   for (; f < frames && !(script && script->done()); ++f) {
+    timings.Begin(state, now_t());
     render.Run([&] { ApplyActions(runner, state); });
     UpdateTextures(gl, render, runner, state, tex);
+    timings.End(now_t());
     ImGuiIO& io = ImGui::GetIO();
     io.DisplaySize = ImVec2(static_cast<float>(cmd.width), static_cast<float>(cmd.height));
     io.DeltaTime = 1.0f / 30.0f;
@@ -1281,7 +1346,7 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
   ImGui::DestroyContext();
   OSMesaDestroyContext(ctx);
   std::cout << "offscreen interface (no display): " << f << " frames, t "
-            << runner.session().t(std::max(0, runner.sample())) << " s";
+            << runner.session().t(std::max(0, runner.sample())) << " s" << timings.Report();
   if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;
   std::cout << "\n";
   return script && script->failures() > 0 ? 1 : 0;
@@ -1345,6 +1410,8 @@ int RunGui(const GuiCommand& cmd) {
   Textures tex;
   int frames = 0;
   std::vector<double> frame_ms;
+  Timings timings;
+  const auto now_t = [&] { return runner.session().t(std::max(0, runner.sample())); };
   auto last = std::chrono::steady_clock::now();
   while (!glfwWindowShouldClose(window) &&
          (script ? !script->done() : cmd.frames < 0 || frames < cmd.frames)) {
@@ -1353,8 +1420,10 @@ int RunGui(const GuiCommand& cmd) {
       frame_ms.push_back(std::chrono::duration<double, std::milli>(now - last).count());
     last = now;
     glfwPollEvents();
+    timings.Begin(state, now_t());
     render.Run([&] { ApplyActions(runner, state); });
     UpdateTextures(gl, render, runner, state, tex);
+    timings.End(now_t());
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     if (script) script->BeforeFrame(runner, state, ImGui::GetIO());
@@ -1391,7 +1460,7 @@ int RunGui(const GuiCommand& cmd) {
   const double p95 =
       frame_ms.empty() ? 0.0 : frame_ms[std::min(frame_ms.size() - 1, frame_ms.size() * 95 / 100)];
   std::cout << "window: " << frames << " frames, frame time median " << median << " ms, p95 " << p95
-            << " ms";
+            << " ms" << timings.Report();
   if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;
   std::cout << "\n";
   return script && script->failures() > 0 ? 1 : 0;

@@ -78,6 +78,19 @@ long SessionOverview::Read(long version, Data& data) const {
   return version_;
 }
 
+bool SessionOverview::CheckpointIn(int after, int at_most, int& resume,
+                                   SessionPlayer::Checkpoint& checkpoint, int& last_frame) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = checkpoints_.upper_bound(at_most);
+  if (it == checkpoints_.begin()) return false;
+  --it;
+  if (it->first <= after) return false;
+  resume = it->first;
+  checkpoint = it->second.checkpoint;
+  last_frame = it->second.last_frame;
+  return true;
+}
+
 void SessionOverview::Run(const Session& session, const TrackerParams& params,
                           std::vector<ModalitySet> sets) {
   try {
@@ -115,9 +128,17 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
     };
     constexpr int kPublish = 250;  // samples
     constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    const int every = CheckpointEvery(n);
+    int last_frame = -1;
     for (int k = 0; k < n; ++k) {
       if (stop_) return;
       player.Step(k);
+      if (player.last_frame() >= 0) last_frame = player.last_frame();
+      if ((k + 1) % every == 0 && k + 1 < n) {
+        Saved saved{player.Save(), last_frame};
+        std::lock_guard<std::mutex> lock(mutex_);
+        checkpoints_.emplace(k + 1, std::move(saved));
+      }
       found.t.push_back(session.t(k));
       for (std::size_t i = 0; i < num_sets; ++i) {
         const EstimateRecord& r = player.last(i);

@@ -185,6 +185,42 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
   }
 }
 
+// The overview keeps checkpoints on its way; a player restored from one (the GUI seeking forward
+// to where it has not been) goes on bit-identically to one that stepped every sample.
+TEST(SessionOverview, ItsCheckpointsResumeBitIdentically) {
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " +
+                            (dir / "session"))
+                .exit_code,
+            0);
+  const Session session = Session::Load(dir / "session");
+  const std::vector<app::ModalitySet> sets = app::ParseModalities("jt,jta,jtf");
+  app::SessionOverview overview(session, TrackerParams(), sets);
+  overview.Wait();
+  const int n = session.num_samples(), every = app::SessionOverview::CheckpointEvery(n);
+  SessionPlayer::Checkpoint c;
+  int resume = -1, last_frame = -2;
+  EXPECT_FALSE(overview.CheckpointIn(-1, every - 1, resume, c, last_frame));
+  ASSERT_TRUE(overview.CheckpointIn(-1, n / 2, resume, c, last_frame));
+  EXPECT_EQ(resume, n / 2 / every * every);
+  EXPECT_FALSE(overview.CheckpointIn(resume, n / 2, resume, c, last_frame));  // none after it
+  SessionPlayer stepped(session, TrackerParams(), sets), restored(session, TrackerParams(), sets);
+  int frame = -1;
+  for (int k = 0; k < resume; ++k) {
+    stepped.Step(k);
+    if (stepped.last_frame() >= 0) frame = stepped.last_frame();
+  }
+  EXPECT_EQ(last_frame, frame);
+  restored.Restore(c);
+  for (int k = resume; k < n; ++k) {
+    stepped.Step(k), restored.Step(k);
+    for (std::size_t i = 0; i < sets.size(); ++i)
+      ASSERT_TRUE(stepped.last(i).T_PO.matrix() == restored.last(i).T_PO.matrix() &&
+                  stepped.last(i).biases == restored.last(i).biases)
+          << sets[i].name << " sample " << k;
+  }
+}
+
 // At a camera frame the tag set reports its innovation (it was never set for jta), and a
 // sample's gated count is its contacts' and features' once (the visual gates were added twice).
 TEST(SessionPlayer, VisualRecordsOfTagsAndFeatures) {

@@ -3,8 +3,10 @@
 // replays the session on a background thread, without pictures, and publishes what it has found so
 // far — every set's events (tracker/events.hpp) and, per joint sample, the series the plots draw.
 // The GUI's own player only knows the session up to the time shown.
+#include <algorithm>
 #include <array>
 #include <atomic>
+#include <map>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -64,10 +66,23 @@ class SessionOverview {
   // Blocks until the whole session is replayed.
   void Wait();
 
+  // On its way the replay keeps a checkpoint every CheckpointEvery(samples) samples (at most ~50),
+  // so the GUI's player can seek forward to places it has not stepped through yet. The latest
+  // one resuming at a sample in (after, at_most]: false when none. `resume` is the sample it
+  // resumes at, `last_frame` the last camera frame processed before it (-1: none).
+  bool CheckpointIn(int after, int at_most, int& resume, SessionPlayer::Checkpoint& checkpoint,
+                    int& last_frame) const;
+  static int CheckpointEvery(int samples) { return std::max(250, samples / 50); }
+
  private:
   void Run(const Session& session, const TrackerParams& params, std::vector<ModalitySet> sets);
   mutable std::mutex mutex_;
   Data data_;
+  struct Saved {
+    SessionPlayer::Checkpoint checkpoint;
+    int last_frame = -1;
+  };
+  std::map<int, Saved> checkpoints_;  // by the sample they resume at
   long version_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;
