@@ -36,6 +36,7 @@
 #include "inhand/app/session_overview.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/core/time.hpp"
+#include "inhand/renderer/timeline_strip.hpp"
 #include "inhand/sessions/image_io.hpp"
 
 namespace inhand::app {
@@ -383,15 +384,6 @@ void DrawFeatureMatching(const SessionPlayer& p, const Textures& tex, float avai
 }
 
 ImU32 Im(const Rgb& c, int alpha = 255) { return IM_COL32(c.r, c.g, c.b, alpha); }
-
-// A tick step of 1, 2 or 5 times a power of ten giving at least `min_px` between ticks.
-double TickStep(double span, float width, float min_px) {
-  const double raw = span * min_px / std::max(1.0f, width);
-  const double decade = std::pow(10.0, std::floor(std::log10(std::max(raw, 1e-9))));
-  for (const double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * decade >= raw) return m * decade;
-  return 10.0 * decade;
-}
 
 // The event nearest in time to the current one, before (`dir` < 0) or after it, of every set;
 // contacts only when shown. Null when none.

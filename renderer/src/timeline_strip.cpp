@@ -34,7 +34,8 @@ int TextWidth(const std::string& s) {
   return cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, kFont, 1, &base).width;
 }
 
-// A tick step of 1, 2 or 5 times a power of ten giving at least `min_px` between ticks.
+}  // namespace
+
 double TickStep(double span, double width, double min_px) {
   const double raw = span * min_px / std::max(1.0, width);
   const double decade = std::pow(10.0, std::floor(std::log10(std::max(raw, 1e-9))));
@@ -42,8 +43,6 @@ double TickStep(double span, double width, double min_px) {
     if (m * decade >= raw) return m * decade;
   return 10.0 * decade;
 }
-
-}  // namespace
 
 TimelineStripPainter::TimelineStripPainter(const TimelineStrip& strip, int width) : strip_(strip) {
   INHAND_CHECK(width >= kLabel + kRight + 16, "TimelineStripPainter: too narrow");

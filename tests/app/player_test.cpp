@@ -23,14 +23,19 @@ namespace {
 
 using app::SessionPlayer;
 
+// The ketchup power grasp simulated with `options` into dir/session.
+bool SimulateKetchup(const test::TempDir& dir, const std::string& options) {
+  const test::CommandResult r =
+      test::RunInhand("simulate ketchup-power-grasp " + options + " --out " + (dir / "session"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return r.exit_code == 0;
+}
+
 // The GUI seeks back by restoring a checkpoint: the run from there must be bit-identical to the
 // uninterrupted one, for every modality set, across camera frames (tags and extracted features).
 TEST(SessionPlayer, CheckpointResumesBitIdentically) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " +
-                            (dir / "session"))
-                .exit_code,
-            0);
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 4"));
   Session session = Session::Load(dir / "session");
   SessionPlayer player(session, TrackerParams());
   ASSERT_EQ(player.sets().size(), 4u);
@@ -68,10 +73,7 @@ TEST(SessionPlayer, CheckpointResumesBitIdentically) {
 // for set, its series estimates.csv's; a second read with the version it returned adds nothing.
 TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " +
-                            (dir / "session"))
-                .exit_code,
-            0);
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 4"));
   ASSERT_EQ(test::RunInhand("replay " + (dir / "session") +
                             " --no-video --modalities jt,jtf --out " + (dir / "replay"))
                 .exit_code,
@@ -189,10 +191,7 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
 // to where it has not been) goes on bit-identically to one that stepped every sample.
 TEST(SessionOverview, ItsCheckpointsResumeBitIdentically) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 4 --out " +
-                            (dir / "session"))
-                .exit_code,
-            0);
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 4"));
   const Session session = Session::Load(dir / "session");
   const std::vector<app::ModalitySet> sets = app::ParseModalities("jt,jta,jtf");
   app::SessionOverview overview(session, TrackerParams(), sets);
@@ -225,10 +224,7 @@ TEST(SessionOverview, ItsCheckpointsResumeBitIdentically) {
 // sample's gated count is its contacts' and features' once (the visual gates were added twice).
 TEST(SessionPlayer, VisualRecordsOfTagsAndFeatures) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 5 --out " +
-                            (dir / "session"))
-                .exit_code,
-            0);
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 5"));
   Session session = Session::Load(dir / "session");
   SessionPlayer player(session, TrackerParams(), app::ParseModalities("jta,jtf"));
   int frames = 0;
@@ -299,10 +295,7 @@ void WriteCopy(const Session& sim, SessionInfo info, const std::string& out, boo
 // is its filter's (the grip loosened): the ketchup scenario loosens it at 4.5 s.
 TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 2 --out " +
-                            (dir / "session"))
-                .exit_code,
-            0);
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 2"));
   const Session sim = Session::Load(dir / "session");
   SessionInfo info = sim.info();
   info.initial_T_PO.linear() =
@@ -355,10 +348,7 @@ TEST(FrameComposer, TheHudSaysWhenTheObjectWasFoundAgainAndWhenTheGripLoosened) 
 // the gap says; the grasping fingers touch.
 TEST(FrameComposer, FingerGapsAgreeWithTheObjectsDistanceField) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise none --seed 2 --out " +
-                            (dir / "session"))
-                .exit_code,
-            0);
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise none --seed 2"));
   const Session session = Session::Load(dir / "session");
   SessionPlayer player(session, TrackerParams(), app::ParseModalities("j"));
   const int k_end = session.num_samples() * 3 / 4;
@@ -410,10 +400,7 @@ TEST(FrameComposer, TheHudLineGivesTheLargestSigmaOfPositionAndOrientation) {
 // bit-identically (torques never reach j), runs ja and jf by default, and refuses jt.
 TEST(SessionPlayer, TorqueFreeSessionRunsJointsTagsAndFeatures) {
   test::TempDir dir;
-  ASSERT_EQ(test::RunInhand("simulate ketchup-power-grasp --noise paper --seed 6 --out " +
-                            (dir / "session"))
-                .exit_code,
-            0);
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 6"));
   const Session sim = Session::Load(dir / "session");
   // Two copies through the same writer (a session.json round trip rounds the initial pose),
   // with and without the torque columns.

@@ -47,6 +47,10 @@ class TimelineStripPainter {
   Image8 background_;
   int x0_ = 0, x1_ = 0;  // [px] the axis's span
 };
+// An axis's tick step: 1, 2 or 5 times a power of ten, at least `min_px` apart over `width_px`
+// pixels spanning `span` (the GUI's time and value axes use it too).
+double TickStep(double span, double width_px, double min_px);
+
 // `top` above `bottom`, both as wide as `top` (`bottom` padded or cut on the right); even sizes
 // for H.264.
 Image8 StackBelow(const Image8& top, const Image8& bottom);
