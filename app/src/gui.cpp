@@ -66,12 +66,10 @@ struct GuiState {
   bool pictures_dirty = true;
   // The whole session's events and series (SessionOverview), and how far they are known.
   SessionOverview::Data overview;
-  long overview_version = -1;  // -1: copy whatever the overview has
-  bool timeline_contacts = true;
-  int error_axis = 0;
-  int bias_joint = 0;  // the Biases and counts tab's joint (configuration order)  // the Errors
-                       // tab: 0 norms and largest axes, 1-3 the object frame's x, y, z
-                       // // contact events on the timeline and in [ ] jumps
+  long overview_version = -1;     // -1: copy whatever the overview has
+  bool timeline_contacts = true;  // contact events on the timeline and in [ ] jumps
+  int error_axis = 0;  // the Errors tab: 0 norms and largest axes, 1-3 the object frame's x, y, z
+  int bias_joint = 0;  // the Biases and counts tab's joint (configuration order)
   ImGuiTextFilter event_filter;
   double event_list_t = -1.0;  // [s] the time the event list last scrolled to
   // The time window the timeline and the plots share [s] (NaN: the whole session).
@@ -621,16 +619,20 @@ void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec
   const std::size_t a = static_cast<std::size_t>(first - data.t.begin()),
                     b = static_cast<std::size_t>(last - data.t.begin());
   double lo = 0.0, hi = 0.0;
-  for (std::size_t i = 0; i < data.sets.size(); ++i)
-    for (std::size_t k = a; k < b && k < spec.series(data.sets[i]).size() && !state.Hidden(i);
-         ++k) {
-      const double v = spec.series(data.sets[i])[k];
+  for (std::size_t i = 0; i < data.sets.size(); ++i) {
+    if (state.Hidden(i)) continue;
+    const std::vector<float>& y = spec.series(data.sets[i]);
+    for (std::size_t k = a; k < b && k < y.size(); ++k) {
+      const double v = y[k];
       if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
-      if (spec.envelope && k < spec.envelope(data.sets[i]).size()) {
-        const double e = spec.envelope(data.sets[i])[k];
-        if (std::isfinite(e)) lo = std::min(lo, -e), hi = std::max(hi, e);
-      }
     }
+    if (!spec.envelope) continue;
+    const std::vector<float>& e = spec.envelope(data.sets[i]);
+    for (std::size_t k = a; k < b && k < e.size(); ++k) {
+      const double v = e[k];
+      if (std::isfinite(v)) lo = std::min(lo, -v), hi = std::max(hi, v);
+    }
+  }
   if (std::isfinite(spec.line)) hi = std::max(hi, spec.line);
   if (std::isfinite(spec.band_hi)) hi = std::max(hi, spec.band_hi);
   const bool capped = std::isfinite(spec.cap) && hi > spec.cap;

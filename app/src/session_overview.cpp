@@ -31,6 +31,20 @@ constexpr std::array<std::vector<float>, 3> Set::*kAxisSeries[] = {
     &Set::position_error_axis, &Set::orientation_error_axis, &Set::sigma_position_axis,
     &Set::sigma_orientation_axis};
 
+// Calls f(from's series, to's series) for every per-sample series of a set — the plain ones, each
+// axis's, each joint's (to's per-joint lists sized to from's first). From is const when reading,
+// not when publishing (what is published is cleared).
+template <typename From, typename F>
+void ForEachSeries(From& from, Set& to, F f) {
+  for (auto series : kSeries) f(from.*series, to.*series);
+  for (auto series : kAxisSeries)
+    for (std::size_t a = 0; a < 3; ++a) f((from.*series)[a], (to.*series)[a]);
+  for (auto series : {&Set::bias, &Set::sigma_bias}) {
+    (to.*series).resize((from.*series).size());
+    for (std::size_t j = 0; j < (from.*series).size(); ++j) f((from.*series)[j], (to.*series)[j]);
+  }
+}
+
 template <typename T>
 void AppendFrom(const std::vector<T>& from, std::vector<T>& to, std::size_t have) {
   if (from.size() > have) to.insert(to.end(), from.begin() + static_cast<long>(have), from.end());
@@ -66,14 +80,9 @@ long SessionOverview::Read(long version, Data& data) const {
     const Set& from = data_.sets[i];
     Set& to = data.sets[i];
     AppendFrom(from.events, to.events, to.events.size());
-    for (auto series : kSeries) AppendFrom(from.*series, to.*series, have);
-    for (auto series : kAxisSeries)
-      for (std::size_t a = 0; a < 3; ++a) AppendFrom((from.*series)[a], (to.*series)[a], have);
-    for (auto series : {&Set::bias, &Set::sigma_bias}) {
-      (to.*series).resize((from.*series).size());
-      for (std::size_t j = 0; j < (from.*series).size(); ++j)
-        AppendFrom((from.*series)[j], (to.*series)[j], have);
-    }
+    ForEachSeries(from, to, [have](const std::vector<float>& source, std::vector<float>& target) {
+      AppendFrom(source, target, have);
+    });
   }
   return version_;
 }
@@ -108,18 +117,10 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         Set& to = data_.sets[i];
         to.events.insert(to.events.end(), from.events.begin(), from.events.end());
         from.events.clear();
-        const auto move = [](std::vector<float>& source, std::vector<float>& target) {
+        ForEachSeries(from, to, [](std::vector<float>& source, std::vector<float>& target) {
           target.insert(target.end(), source.begin(), source.end());
           source.clear();
-        };
-        for (auto series : kSeries) move(from.*series, to.*series);
-        for (auto series : kAxisSeries)
-          for (std::size_t a = 0; a < 3; ++a) move((from.*series)[a], (to.*series)[a]);
-        for (auto series : {&Set::bias, &Set::sigma_bias}) {
-          (to.*series).resize((from.*series).size());
-          for (std::size_t j = 0; j < (from.*series).size(); ++j)
-            move((from.*series)[j], (to.*series)[j]);
-        }
+        });
       }
       data_.progress.t = session.t(k);
       data_.progress.share = n > 1 ? static_cast<double>(k) / (n - 1) : 1.0;
