@@ -245,33 +245,6 @@ TEST(SessionPlayer, VisualRecordsOfTagsAndFeatures) {
 
 // Modality sets are j plus any of t, a, f; one canonical name per combination, a distinct colour
 // for each, and errors that say what was expected.
-TEST(Modalities, EveryCombinationParsesToOneNameAndColour) {
-  const std::vector<app::ModalitySet> sets = app::ParseModalities("j,jt,ja,jf,jat,jtf,jfa,jfat");
-  const std::vector<std::string> names = {"j", "jt", "ja", "jf", "jta", "jtf", "jaf", "jtaf"};
-  ASSERT_EQ(sets.size(), names.size());
-  for (std::size_t i = 0; i < sets.size(); ++i) {
-    EXPECT_EQ(sets[i].name, names[i]);
-    EXPECT_EQ(sets[i].torque, names[i].find('t') != std::string::npos);
-    EXPECT_EQ(sets[i].tags, names[i].find('a') != std::string::npos);
-    EXPECT_EQ(sets[i].features, names[i].find('f') != std::string::npos);
-    for (std::size_t k = 0; k < i; ++k) {
-      const Rgb a = sets[i].colour, b = sets[k].colour;
-      EXPECT_GT(std::abs(a.r - b.r) + std::abs(a.g - b.g) + std::abs(a.b - b.b), 60)
-          << names[i] << " vs " << names[k];
-    }
-  }
-  // The paper's four keep the paper's colours.
-  EXPECT_EQ(sets[1].colour.b, kColourTorques.b);
-  EXPECT_EQ(sets[5].colour.g, kColourFeatures.g);
-  for (const char* bad : {"", "t", "jx", "jtt", "j,ja,aj"})
-    EXPECT_THROW(app::ParseModalities(bad), InputError) << bad;
-  EXPECT_THROW(app::ParseModalities("ja,jaa"), InputError);
-  EXPECT_THROW(app::ParseModalities("jta,jat"), InputError);  // the same set twice
-  EXPECT_EQ(app::DefaultModalities(true, true, true), "j,jt,jta,jtf");
-  EXPECT_EQ(app::DefaultModalities(false, true, true), "j,ja,jf");
-  EXPECT_EQ(app::DefaultModalities(false, false, true), "j");
-}
-
 // The recording `sim` written again to `out` through the session writer, with `info` (its models'
 // paths made absolute, so they stay where the simulator put them) and with or without torques.
 void WriteCopy(const Session& sim, SessionInfo info, const std::string& out, bool torques) {

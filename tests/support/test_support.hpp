@@ -12,6 +12,14 @@
 namespace inhand::test {
 
 inline std::string SourceDir() { return INHAND_SOURCE_DIR; }
+
+// Built with AddressSanitizer and UBSan (scripts/sanitize.sh): the heaviest loops draw fewer
+// samples there, with the same assertions (the Release build runs them whole).
+#ifdef INHAND_SANITIZED
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
 inline std::string ProjectAsset(const std::string& rel) { return SourceDir() + "/assets/" + rel; }
 
 // ../shared/assets beside the repository, or "" when absent (tests then skip).
