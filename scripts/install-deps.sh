@@ -19,6 +19,8 @@ PACKAGES=(
   libzstd-dev liblz4-dev libsqlite3-dev libdeflate-dev
   # The official writers the importer is tested against: Debian's rosbag (Python).
   python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs python3-nav-msgs
+  # The Python module (import inhand): pybind11 over the Tracker and sessions, NumPy arrays.
+  pybind11-dev python3-dev python3-numpy
 )
 # Node.js for the official MCAP / ROS 2 tools (npm packages below): Debian's, unless a Node.js
 # with npm is installed already (its package conflicts with Debian's npm).

@@ -56,6 +56,7 @@ class Session {
   const std::vector<std::string>& joint_names() const { return joint_names_; }
   int num_samples() const { return static_cast<int>(t_.size()); }
   double t(int k) const { return t_[k]; }
+  const std::vector<double>& times() const { return t_; }
   Eigen::Ref<const Eigen::VectorXd> q(int k) const { return q_.row(k).transpose(); }
   // Joint torques, when joints.csv has tau: columns (hands without torque sensors have none).
   bool has_torques() const { return tau_.cols() > 0; }

@@ -1,0 +1,430 @@
+// The Python module `inhand` (pybind11): sessions, the hand and object models, and the online
+// Tracker, with NumPy arrays in and out. Poses are 4×4 arrays (T_AB: frame B in A), images
+// H×W×3 (RGB) or H×W (grey) uint8 arrays. Errors raise inhand.InputError (a ValueError) with the
+// C++ message. Every call that can take longer than a millisecond releases the GIL.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "inhand/core/error.hpp"
+#include "inhand/io/object_loader.hpp"
+#include "inhand/io/urdf_loader.hpp"
+#include "inhand/sessions/session.hpp"
+#include "inhand/tracker/tracker.hpp"
+
+namespace py = pybind11;
+
+namespace inhand {
+namespace {
+
+using Mat4 = Eigen::Matrix4d;
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// A 4×4 rigid transform from Python: finite, last row (0 0 0 1), rotation orthonormal with
+// determinant 1 (within 1e-6).
+Transform ToTransform(const Mat4& m, const char* what) {
+  if (!m.allFinite()) throw InputError(std::string(what) + ": not finite");
+  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 0.0)
+    throw InputError(std::string(what) + ": last row is not (0 0 0 1)");
+  const Mat3 R = m.topLeftCorner<3, 3>();
+  if ((R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
+      std::abs(R.determinant() - 1.0) > 1e-6)
+    throw InputError(std::string(what) + ": the top-left 3x3 block is not a rotation");
+  Transform T = Transform::Identity();
+  T.linear() = R;
+  T.translation() = m.topRightCorner<3, 1>();
+  return T;
+}
+
+Modalities ParseSet(const std::string& set) {
+  const std::string expected = "expected 'j' followed by any of 't', 'a', 'f' once each";
+  if (set.empty() || set[0] != 'j') throw InputError("set '" + set + "': " + expected);
+  Modalities m;
+  for (std::size_t i = 1; i < set.size(); ++i) {
+    bool* flag = set[i] == 't'   ? &m.torque
+                 : set[i] == 'a' ? &m.tags
+                 : set[i] == 'f' ? &m.features
+                                 : nullptr;
+    if (flag == nullptr || *flag) throw InputError("set '" + set + "': " + expected);
+    *flag = true;
+  }
+  return m;
+}
+
+// Tracker parameters: None (the defaults), a dict (as the JSON file) or JSON text.
+TrackerParams ParamsFrom(const py::object& params) {
+  if (params.is_none()) return TrackerParams();
+  if (py::isinstance<py::str>(params))
+    return TrackerParamsFromJson(params.cast<std::string>(), "tracker parameters");
+  if (py::isinstance<py::dict>(params))
+    return TrackerParamsFromJson(
+        py::module_::import("json").attr("dumps")(params).cast<std::string>(),
+        "tracker parameters");
+  throw InputError("tracker parameters: expected None, a dict or JSON text");
+}
+
+Intrinsics IntrinsicsFrom(const Mat3& K, int width, int height,
+                          const std::vector<double>& distortion) {
+  Intrinsics in;
+  in.width = width;
+  in.height = height;
+  in.fx = K(0, 0);
+  in.fy = K(1, 1);
+  in.cx = K(0, 2);
+  in.cy = K(1, 2);
+  if (K(0, 1) != 0.0 || K(1, 0) != 0.0 || K(2, 0) != 0.0 || K(2, 1) != 0.0 || K(2, 2) != 1.0)
+    throw InputError("K: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
+  if (!distortion.empty()) {
+    if (distortion.size() != 5)
+      throw InputError("distortion: expected 5 values (k1 k2 p1 p2 k3), got " +
+                       std::to_string(distortion.size()));
+    std::copy(distortion.begin(), distortion.end(), in.distortion.begin());
+  }
+  in.Validate("K");
+  return in;
+}
+
+Mat3 KOf(const Intrinsics& in) {
+  Mat3 K;
+  K << in.fx, 0.0, in.cx, 0.0, in.fy, in.cy, 0.0, 0.0, 1.0;
+  return K;
+}
+
+Image8 ImageFrom(const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& a) {
+  if (a.ndim() != 2 && !(a.ndim() == 3 && (a.shape(2) == 3 || a.shape(2) == 1)))
+    throw InputError("image: expected an H x W x 3 (RGB) or H x W (grey) uint8 array");
+  Image8 image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)),
+               a.ndim() == 3 ? static_cast<int>(a.shape(2)) : 1);
+  std::memcpy(image.data.data(), a.data(), image.data.size());
+  return image;
+}
+
+py::array_t<std::uint8_t> ToArray(const Image8& image) {
+  std::vector<py::ssize_t> shape = {image.height, image.width};
+  if (image.channels > 1) shape.push_back(image.channels);
+  py::array_t<std::uint8_t> a(shape);
+  std::memcpy(a.mutable_data(), image.data.data(), image.data.size());
+  return a;
+}
+
+py::dict HealthDict(const Health& h, const HandModel& hand) {
+  py::dict d;
+  d["state"] = HealthStateName(h.state);
+  d["cause"] = HealthCauseName(h.cause);
+  d["value"] = h.value;
+  d["subject"] = h.subject;
+  d["since"] = h.since;
+  d["message"] = HealthMessage(h, hand);
+  return d;
+}
+
+py::dict StatsDict(const TrackerStats& s) {
+  py::dict d;
+  d["samples"] = s.samples;
+  d["samples_dropped"] = s.samples_dropped;
+  d["samples_rejected"] = s.samples_rejected;
+  d["images_added"] = s.images_added;
+  d["images_fused"] = s.images_fused;
+  d["images_dropped_late"] = s.images_dropped_late;
+  d["images_dropped_busy"] = s.images_dropped_busy;
+  d["images_rejected"] = s.images_rejected;
+  d["rewinds"] = s.rewinds;
+  d["samples_replayed"] = s.samples_replayed;
+  d["relocalizations"] = s.relocalizations;
+  d["images_features_lost"] = s.images_features_lost;
+  d["images_tags_elsewhere"] = s.images_tags_elsewhere;
+  d["recoveries"] = s.recoveries;
+  d["shifts_refused"] = s.shifts_refused;
+  return d;
+}
+
+// The Tracker with the models it refers to kept alive by Python (keep_alive on construction),
+// and the joint vectors checked against the hand before they reach it.
+class PyTracker {
+ public:
+  PyTracker(const HandModel& hand, const ObjectModel& object, const std::string& set,
+            const py::object& params, bool threaded, double horizon, int history_samples,
+            int max_queued_images)
+      : hand_(hand) {
+    TrackerOptions options;
+    options.threaded = threaded;
+    options.horizon = horizon;
+    options.history_samples = history_samples;
+    options.max_queued_images = max_queued_images;
+    if (!(horizon > 0.0) || history_samples < 2 || max_queued_images < 1)
+      throw InputError(
+          "Tracker: expected horizon > 0, history_samples >= 2, max_queued_images >= 1");
+    tracker_ = std::make_unique<Tracker>(hand, object, ParseSet(set), ParamsFrom(params), options);
+  }
+
+  void Start(double t, const Mat4& T_PO, double sigma_position, double sigma_orientation,
+             double sigma_bias) {
+    StartSigmas sigmas;
+    sigmas.position = sigma_position;
+    sigmas.orientation = sigma_orientation;
+    sigmas.bias = sigma_bias;
+    sigmas.Validate("start");
+    tracker_->Start(t, ToTransform(T_PO, "T_PO"), sigmas);
+    start_called_ = true;
+  }
+
+  void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const std::optional<Eigen::Ref<const Eigen::VectorXd>>& tau) {
+    const long n = hand_.num_q();
+    if (q.size() != n)
+      throw InputError("q: " + std::to_string(q.size()) + " values, the hand has " +
+                       std::to_string(n) + " joints");
+    if (tau && tau->size() != n)
+      throw InputError("tau: " + std::to_string(tau->size()) + " values, the hand has " +
+                       std::to_string(n) + " joints");
+    if (!started_check()) throw InputError("add_joint_sample before start");
+    py::gil_scoped_release release;
+    if (tau) {
+      tracker_->AddJointSample(t, q, *tau);
+    } else {
+      if (zeros_.size() != n) zeros_ = Eigen::VectorXd::Zero(n);
+      tracker_->AddJointSample(t, q, zeros_);
+    }
+  }
+
+  void AddImage(double t_capture,
+                const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& image,
+                const Mat4& T_PC, const Mat3& K, const std::vector<double>& distortion) {
+    Image8 im = ImageFrom(image);
+    const Intrinsics in = IntrinsicsFrom(K, im.width, im.height, distortion);
+    const Transform T = ToTransform(T_PC, "T_PC");
+    if (!started_check()) throw InputError("add_image before start");
+    py::gil_scoped_release release;
+    tracker_->AddImage(t_capture, im, T, in);
+  }
+
+  // The C++ Tracker treats a sample before Start as a programming error (it aborts); Python
+  // gets an exception.
+  bool started_check() const { return start_called_; }
+  Tracker& tracker() { return *tracker_; }
+  const HandModel& hand() const { return hand_; }
+
+  py::list TakeEvents() {
+    std::vector<TrackerEvent> events;
+    tracker_->TakeEvents(events);
+    py::list out;
+    for (const TrackerEvent& e : events) {
+      py::dict d;
+      d["t"] = e.t;
+      d["kind"] = EventKindName(e.kind);
+      d["subject"] = EventSubject(e, hand_);
+      d["value"] = e.value;
+      d["count"] = e.count;
+      d["duration"] = e.duration;
+      d["message"] = EventMessage(e, hand_);
+      out.append(d);
+    }
+    return out;
+  }
+
+ private:
+  const HandModel& hand_;
+  std::unique_ptr<Tracker> tracker_;
+  Eigen::VectorXd zeros_;
+  bool start_called_ = false;
+};
+
+}  // namespace
+}  // namespace inhand
+
+PYBIND11_MODULE(inhand, m) {
+  using namespace inhand;
+  m.doc() =
+      "inhand: where the object in a robot hand is. Sessions, hand and object models, and the "
+      "online Tracker (an extended Kalman filter over the object pose and joint biases fusing "
+      "joints, joint torques, AprilTags and image features). Poses are 4x4 arrays T_AB, frame B "
+      "in A; P is the palm, O the object, C the camera.";
+  py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
+
+  py::class_<HandModel>(m, "Hand", "A hand loaded from its URDF.")
+      .def_property_readonly("joint_names", &HandModel::QNames,
+                             "Independent joints in the order q, tau and biases use.")
+      .def_property_readonly("num_joints", &HandModel::num_q);
+  py::class_<ObjectModel>(m, "Object", "An object loaded from its description (.json or .urdf).");
+
+  m.def(
+      "load_hand",
+      [](const std::string& urdf, const std::map<std::string, std::string>& packages) {
+        HandLoadOptions options;
+        options.packages.dirs = packages;
+        options.load_visual_meshes = true;
+        py::gil_scoped_release release;
+        return LoadHandModel(urdf, options);
+      },
+      py::arg("urdf"), py::arg("packages") = std::map<std::string, std::string>{},
+      "Loads a hand from its URDF; packages maps ROS package names to directories.");
+  m.def(
+      "load_object",
+      [](const std::string& path, const std::map<std::string, std::string>& packages) {
+        PackageMap map;
+        map.dirs = packages;
+        py::gil_scoped_release release;
+        return LoadObjectModel(path, map);
+      },
+      py::arg("path"), py::arg("packages") = std::map<std::string, std::string>{},
+      "Loads an object description (.json or .urdf) with its contact field.");
+
+  py::class_<Session>(m, "Session",
+                      "A recorded or simulated session (sessions/FORMAT.md), read and validated "
+                      "whole.")
+      .def(py::init([](const std::string& dir) {
+             py::gil_scoped_release release;
+             return Session::Load(dir);
+           }),
+           py::arg("dir"))
+      .def_property_readonly("dir", &Session::dir)
+      .def_property_readonly("joint_names", &Session::joint_names,
+                             "joints.csv's columns, the order of q and tau.")
+      .def_property_readonly(
+          "t",
+          [](const py::object& self) {
+            const Session& s = self.cast<const Session&>();
+            return py::array_t<double>(static_cast<py::ssize_t>(s.times().size()), s.times().data(),
+                                       self);
+          },
+          "Joint sample times [s], a read-only view into the session (no copy).")
+      .def_property_readonly(
+          "q", [](const Session& s) -> const RowMatrix& { return s.q_all(); },
+          py::return_value_policy::reference_internal,
+          "Joint positions [rad], samples x joints, a read-only view (no copy).")
+      .def_property_readonly(
+          "tau",
+          [](const py::object& self) -> py::object {
+            const Session& s = self.cast<const Session&>();
+            if (!s.has_torques()) return py::none();
+            return py::cast(s.tau_all(), py::return_value_policy::reference_internal, self);
+          },
+          "Joint torques [N m] like q, or None without torque sensing.")
+      .def_property_readonly(
+          "frame_times",
+          [](const Session& s) {
+            std::vector<double> t;
+            for (const CameraFrame& f : s.camera_frames()) t.push_back(f.t);
+            return t;
+          },
+          "Capture time of each camera frame [s].")
+      .def(
+          "camera_pose",
+          [](const Session& s, int i) -> Mat4 {
+            if (i < 0 || i >= static_cast<int>(s.camera_frames().size()))
+              throw InputError("camera_pose: frame " + std::to_string(i) + " of " +
+                               std::to_string(s.camera_frames().size()));
+            return s.camera_frames()[static_cast<std::size_t>(i)].T_PC.matrix();
+          },
+          py::arg("i"), "T_PC of frame i.")
+      .def(
+          "image",
+          [](const Session& s, int i) {
+            if (i < 0 || i >= static_cast<int>(s.camera_frames().size()))
+              throw InputError("image: frame " + std::to_string(i) + " of " +
+                               std::to_string(s.camera_frames().size()));
+            Image8 image;
+            {
+              py::gil_scoped_release release;
+              image = s.LoadImage(i);
+            }
+            return ToArray(image);
+          },
+          py::arg("i"), "Frame i's image, decoded: H x W x 3 uint8 (RGB).")
+      .def_property_readonly(
+          "K",
+          [](const Session& s) -> py::object {
+            if (!s.info().camera) return py::none();
+            return py::cast(KOf(*s.info().camera));
+          },
+          "The camera matrix (3x3), or None without a camera.")
+      .def_property_readonly(
+          "distortion",
+          [](const Session& s) -> py::object {
+            if (!s.info().camera) return py::none();
+            const auto& d = s.info().camera->distortion;
+            return py::cast(std::vector<double>(d.begin(), d.end()));
+          },
+          "k1 k2 p1 p2 k3 (OpenCV's model), or None without a camera.")
+      .def_property_readonly(
+          "initial_pose", [](const Session& s) -> Mat4 { return s.info().initial_T_PO.matrix(); })
+      .def_property_readonly("sigma_position",
+                             [](const Session& s) { return s.info().sigma_position; })
+      .def_property_readonly("sigma_orientation",
+                             [](const Session& s) { return s.info().sigma_orientation; })
+      .def_property_readonly("sigma_joint_bias",
+                             [](const Session& s) { return s.info().sigma_joint_bias; })
+      .def(
+          "truth",
+          [](const Session& s, double t) -> py::object {
+            if (!s.has_groundtruth()) return py::none();
+            return py::cast(Mat4(s.GroundTruthAt(t).matrix()));
+          },
+          py::arg("t"), "The true T_PO at t (interpolated), or None without ground truth.")
+      .def(
+          "models",
+          [](const Session& s) {
+            SessionModels models;
+            {
+              py::gil_scoped_release release;
+              models = LoadSessionModels(s);
+            }
+            return py::make_tuple(std::move(models.hand), std::move(models.object),
+                                  models.joint_columns);
+          },
+          "(hand, object, columns): the session's models; q[:, columns] is in the hand's order.");
+
+  py::class_<PyTracker>(m, "Tracker",
+                        "The online estimator of one set (j, jt, jta, jtf, ...). Joint samples at "
+                        "joint rate; images whenever they arrive, fused at their capture time.")
+      .def(py::init<const HandModel&, const ObjectModel&, const std::string&, const py::object&,
+                    bool, double, int, int>(),
+           py::arg("hand"), py::arg("object"), py::arg("set") = "jt",
+           py::arg("params") = py::none(), py::arg("threaded") = false, py::arg("horizon") = 0.5,
+           py::arg("history_samples") = 2048, py::arg("max_queued_images") = 2,
+           py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
+      .def("start", &PyTracker::Start, py::arg("t"), py::arg("T_PO"),
+           py::arg("sigma_position") = 0.020, py::arg("sigma_orientation") = 5.0 * M_PI / 180,
+           py::arg("sigma_bias") = 5.0 * M_PI / 180,
+           "Starts at time t from the guess T_PO with its standard deviations [m, rad, rad].")
+      .def("add_joint_sample", &PyTracker::AddJointSample, py::arg("t"), py::arg("q"),
+           py::arg("tau") = py::none(),
+           "A joint sample in the hand's joint order: positions [rad], external torques [N m] "
+           "(None: zeros, for hands without torque sensing).")
+      .def("add_image", &PyTracker::AddImage, py::arg("t_capture"), py::arg("image"),
+           py::arg("T_PC"), py::arg("K"), py::arg("distortion") = std::vector<double>{},
+           "A camera image captured at t_capture by a camera at T_PC (palm frame) with camera "
+           "matrix K and optional distortion (k1 k2 p1 p2 k3).")
+      .def(
+          "wait_for_images",
+          [](PyTracker& t) {
+            py::gil_scoped_release release;
+            t.tracker().WaitForImages();
+          },
+          "Threaded: waits until every image added has been fused.")
+      .def_property_readonly("t", [](PyTracker& t) { return t.tracker().t(); })
+      .def(
+          "pose", [](PyTracker& t) -> Mat4 { return t.tracker().T_PO().matrix(); },
+          "T_PO, the object in the palm frame (4x4).")
+      .def(
+          "covariance", [](PyTracker& t) { return t.tracker().covariance(); },
+          "Covariance of (position, orientation, joint biases), 6 + joints square.")
+      .def(
+          "biases", [](PyTracker& t) -> Eigen::VectorXd { return t.tracker().biases(); },
+          "Joint position biases [rad].")
+      .def(
+          "stats", [](PyTracker& t) { return StatsDict(t.tracker().stats()); },
+          "Counts of samples and images fused, dropped, rejected; relocalizations, recoveries.")
+      .def(
+          "health", [](PyTracker& t) { return HealthDict(t.tracker().health(), t.hand()); },
+          "The set's own judgement: state (ok, uncertain, inconsistent, lost), cause, message.")
+      .def("take_events", &PyTracker::TakeEvents,
+           "The events found since the last call (contacts, lost features, health changes...).");
+}
