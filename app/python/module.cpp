@@ -43,21 +43,6 @@ Transform ToTransform(const Mat4& m, const char* what) {
   return T;
 }
 
-Modalities ParseSet(const std::string& set) {
-  const std::string expected = "expected 'j' followed by any of 't', 'a', 'f' once each";
-  if (set.empty() || set[0] != 'j') throw InputError("set '" + set + "': " + expected);
-  Modalities m;
-  for (std::size_t i = 1; i < set.size(); ++i) {
-    bool* flag = set[i] == 't'   ? &m.torque
-                 : set[i] == 'a' ? &m.tags
-                 : set[i] == 'f' ? &m.features
-                                 : nullptr;
-    if (flag == nullptr || *flag) throw InputError("set '" + set + "': " + expected);
-    *flag = true;
-  }
-  return m;
-}
-
 // Tracker parameters: None (the defaults), a dict (as the JSON file) or JSON text.
 TrackerParams ParamsFrom(const py::object& params) {
   if (params.is_none()) return TrackerParams();
@@ -161,7 +146,8 @@ class PyTracker {
     if (!(horizon > 0.0) || history_samples < 2 || max_queued_images < 1)
       throw InputError(
           "Tracker: expected horizon > 0, history_samples >= 2, max_queued_images >= 1");
-    tracker_ = std::make_unique<Tracker>(hand, object, ParseSet(set), ParamsFrom(params), options);
+    tracker_ = std::make_unique<Tracker>(hand, object, Modalities::Parse(set, "set"),
+                                         ParamsFrom(params), options);
   }
 
   void Start(double t, const Mat4& T_PO, double sigma_position, double sigma_orientation,

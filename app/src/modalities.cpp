@@ -6,14 +6,6 @@
 
 namespace inhand::app {
 
-namespace {
-
-constexpr const char* kExpected =
-    "expected j followed by any of t (torques), a (AprilTags), f (extracted features): j, jt, ja, "
-    "jf, jta, jtf, jaf, jtaf";
-
-}  // namespace
-
 Rgb ModalityColour(const std::string& name) {
   if (name == "j") return kColourJoints;
   if (name == "jt") return kColourTorques;
@@ -27,23 +19,13 @@ Rgb ModalityColour(const std::string& name) {
 }
 
 ModalitySet ParseModalitySet(const std::string& text) {
-  if (text.empty() || text[0] != 'j')
-    throw InputError("--modalities: '" + text + "': " + kExpected);
+  const Modalities m = Modalities::Parse(text, "--modalities");
   ModalitySet s;
-  for (std::size_t i = 1; i < text.size(); ++i) {
-    bool* flag = text[i] == 't'   ? &s.torque
-                 : text[i] == 'a' ? &s.tags
-                 : text[i] == 'f' ? &s.features
-                                  : nullptr;
-    if (flag == nullptr)
-      throw InputError("--modalities: '" + text + "': unknown letter '" + text[i] + "'; " +
-                       kExpected);
-    if (*flag)
-      throw InputError("--modalities: '" + text + "': letter '" + text[i] + "' given twice");
-    *flag = true;
-  }
+  s.torque = m.torque;
+  s.tags = m.tags;
+  s.features = m.features;
   // One name per combination, in the paper's letter order (jat is jta).
-  s.name = std::string("j") + (s.torque ? "t" : "") + (s.tags ? "a" : "") + (s.features ? "f" : "");
+  s.name = m.Name();
   s.colour = ModalityColour(s.name);
   return s;
 }

@@ -171,7 +171,7 @@ class BadInput(unittest.TestCase):
         f = Fixture.get()
         with self.assertRaisesRegex(inhand.InputError, "no-such-session: session directory not found"):
             inhand.Session(os.path.join(f.tmp.name, "no-such-session"))
-        with self.assertRaisesRegex(ValueError, "set 'jx'"):
+        with self.assertRaisesRegex(ValueError, "set: 'jx': unknown letter 'x'"):
             inhand.Tracker(f.hand, f.object, "jx")
         with self.assertRaisesRegex(ValueError, "tracker parameters.*unknown parameter 'no_such_parameter'"):
             inhand.Tracker(f.hand, f.object, "jt", params={"no_such_parameter": 1})

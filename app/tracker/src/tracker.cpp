@@ -28,6 +28,25 @@ std::string Modalities::Name() const {
   return std::string("j") + (torque ? "t" : "") + (tags ? "a" : "") + (features ? "f" : "");
 }
 
+Modalities Modalities::Parse(const std::string& text, const std::string& context) {
+  const std::string expected =
+      "expected j followed by any of t (torques), a (AprilTags), f (extracted features): j, jt, "
+      "ja, jf, jta, jtf, jaf, jtaf";
+  if (text.empty() || text[0] != 'j') throw InputError(context + ": '" + text + "': " + expected);
+  Modalities m;
+  for (std::size_t i = 1; i < text.size(); ++i) {
+    bool* flag = text[i] == 't'   ? &m.torque
+                 : text[i] == 'a' ? &m.tags
+                 : text[i] == 'f' ? &m.features
+                                  : nullptr;
+    if (flag == nullptr)
+      throw InputError(context + ": '" + text + "': unknown letter '" + text[i] + "'; " + expected);
+    if (*flag) throw InputError(context + ": '" + text + "': letter '" + text[i] + "' given twice");
+    *flag = true;
+  }
+  return m;
+}
+
 namespace {
 
 struct Job {

@@ -45,6 +45,9 @@ struct Modalities {
   bool tags = false;         // a: AprilTag corners
   bool features = false;     // f: features extracted from the camera and the rendered image
   std::string Name() const;  // "j", "jt", "jta", "jtf", "ja", "jf", "jtaf", ...
+  // "j" followed by any of t, a, f once each, in any order ("jat" is jta). Throws InputError
+  // "CONTEXT: 'TEXT': ..." naming the letter at fault.
+  static Modalities Parse(const std::string& text, const std::string& context);
 };
 
 struct TrackerOptions {
