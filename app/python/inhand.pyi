@@ -3,6 +3,7 @@
 Poses are 4x4 float arrays T_AB (frame B in A; P palm, O object, C camera), images H x W x 3
 (RGB) or H x W (grey) uint8 arrays. Errors raise InputError (a ValueError) with the C++ message.
 """
+import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -50,7 +51,96 @@ class Session:
     @property
     def sigma_joint_bias(self) -> float: ...
     def truth(self, t: float) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def truth_samples(self) -> List[Tuple[float, npt.NDArray[np.float64]]]: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def hand_urdf(self) -> str: ...
+    @property
+    def object_file(self) -> str: ...
+    @property
+    def packages(self) -> Dict[str, str]: ...
+    @property
+    def joint_stiffness(self) -> Dict[str, float]: ...
+    @property
+    def provenance(self) -> Dict[str, Any]: ...
+    @property
+    def image_size(self) -> Optional[Tuple[int, int]]: ...
     def models(self) -> Tuple[Hand, Object, List[int]]: ...
+
+class SessionWriter:
+    def __init__(
+        self,
+        dir: str,
+        hand_urdf: str,
+        object: str,
+        joint_names: Sequence[str],
+        *,
+        torques: bool = True,
+        K: Optional[npt.ArrayLike] = None,
+        image_size: Optional[Tuple[int, int]] = None,
+        distortion: Sequence[float] = ...,
+        initial_pose: npt.ArrayLike = ...,
+        sigma_position: float = 0.02,
+        sigma_orientation: float = ...,
+        sigma_joint_bias: float = ...,
+        packages: Mapping[str, str] = ...,
+        joint_stiffness: Mapping[str, float] = ...,
+        name: str = "",
+        provenance: Optional[Dict[str, Any]] = None,
+        overwrite: bool = False,
+    ) -> None: ...
+    def add_joint_sample(
+        self, t: float, q: npt.ArrayLike, tau: Optional[npt.ArrayLike] = None
+    ) -> None: ...
+    def add_camera_frame(self, t: float, image: npt.NDArray[np.uint8], T_PC: npt.ArrayLike) -> None: ...
+    def add_ground_truth(self, t: float, T_PO: npt.ArrayLike) -> None: ...
+    def add_file(self, relative_path: str, contents: str) -> None: ...
+    def commit(self) -> None: ...
+    def discard(self) -> None: ...
+    def __enter__(self) -> "SessionWriter": ...
+    def __exit__(self, *exc: Any) -> bool: ...
+
+Params = Union[None, str, Dict[str, Any], os.PathLike]
+
+def scenarios() -> List[Dict[str, Any]]: ...
+def simulate(
+    scenario: str,
+    out: str,
+    *,
+    seed: int = 1,
+    noise: str = "paper",
+    images: bool = True,
+    overwrite: bool = False,
+    effects: str = "",
+    without: str = "",
+) -> Dict[str, Any]: ...
+def replay(
+    session: str,
+    out: str,
+    *,
+    sets: str = "",
+    params: Params = None,
+    video: bool = True,
+    frames: bool = False,
+    timeline: bool = True,
+    mcap: bool = False,
+    jobs: int = 2,
+) -> Dict[str, Any]: ...
+def evaluate(
+    out: str,
+    *,
+    scenarios: str = "",
+    seeds: int = 5,
+    first_seed: int = 1,
+    noise: str = "paper",
+    sets: str = "j,jt,jta,jtf",
+    params: Params = None,
+    jobs: int = 2,
+    keep_sessions: bool = False,
+    inhand_binary: str = "",
+) -> Dict[str, Any]: ...
 
 class Tracker:
     def __init__(

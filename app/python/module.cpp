@@ -7,12 +7,17 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <unistd.h>
+#include <atomic>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "inhand/app/commands.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
@@ -129,6 +134,208 @@ py::dict StatsDict(const TrackerStats& s) {
   d["shifts_refused"] = s.shifts_refused;
   return d;
 }
+
+// A tracker parameter file for the commands (they read a file, as their --params): None → "",
+// os.PathLike → that file, a dict or JSON text → validated, then written to a temporary file
+// removed when this goes out of scope.
+class ParamsFile {
+ public:
+  explicit ParamsFile(const py::object& params) {
+    if (params.is_none()) return;
+    if (py::isinstance(params, py::module_::import("os").attr("PathLike"))) {
+      path_ = py::str(py::module_::import("os").attr("fspath")(params)).cast<std::string>();
+      return;
+    }
+    const TrackerParams p = ParamsFrom(params);
+    static std::atomic<int> counter{0};
+    temp_ =
+        std::filesystem::temp_directory_path() /
+        ("inhand-params-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".json");
+    std::ofstream(temp_) << TrackerParamsToJson(p) << "\n";
+    path_ = temp_.string();
+  }
+  ~ParamsFile() {
+    std::error_code ec;
+    if (!temp_.empty()) std::filesystem::remove(temp_, ec);
+  }
+  ParamsFile(const ParamsFile&) = delete;
+  ParamsFile& operator=(const ParamsFile&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::filesystem::path temp_;
+};
+
+py::object JsonFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot read");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return py::module_::import("json").attr("loads")(text);
+}
+
+py::dict SimulationDict(const SimulationSummary& s) {
+  py::dict d;
+  d["session_dir"] = s.session_dir;
+  d["duration"] = s.duration;
+  d["wall_time"] = s.wall_time;
+  d["joint_samples"] = s.joint_samples;
+  d["camera_frames"] = s.camera_frames;
+  d["max_penetration"] = s.max_penetration;
+  d["held_fraction"] = s.held_fraction;
+  d["tilt_in_hand_deg"] = s.tilt_in_hand_deg;
+  d["max_in_hand_rotation_deg"] = s.max_in_hand_rotation_deg;
+  d["table_travel_before_grasp"] = s.table_travel_before_grasp;
+  d["lift_height"] = s.lift_height;
+  return d;
+}
+
+// The `inhand` command evaluate runs its runs with: given, or beside the module (the build
+// tree's bin/ next to python/; an installation's PREFIX/bin from PREFIX/lib/python3.X/
+// dist-packages), or on PATH.
+std::string InhandBinary(const std::string& given) {
+  namespace fs = std::filesystem;
+  if (!given.empty()) {
+    if (!fs::is_regular_file(given)) throw InputError("inhand_binary: " + given + ": no such file");
+    return fs::absolute(given).string();
+  }
+  const fs::path here =
+      fs::path(py::module_::import("inhand").attr("__file__").cast<std::string>()).parent_path();
+  for (const fs::path& p : {here / "../bin/inhand", here / "../../../bin/inhand"})
+    if (fs::is_regular_file(p)) return fs::canonical(p).string();
+  const py::object which = py::module_::import("shutil").attr("which")("inhand");
+  if (!which.is_none()) return which.cast<std::string>();
+  throw InputError(
+      "evaluate: cannot find the inhand command (beside the module or on PATH); pass "
+      "inhand_binary=");
+}
+
+// Writes a session from Python, checking what the C++ writer takes as programming errors.
+class PySessionWriter {
+ public:
+  PySessionWriter(const std::string& dir, const std::string& hand_urdf, const std::string& object,
+                  const std::vector<std::string>& joint_names, bool torques,
+                  const std::optional<Mat3>& K, const std::optional<std::pair<int, int>>& size,
+                  const std::vector<double>& distortion, const Mat4& initial_pose,
+                  double sigma_position, double sigma_orientation, double sigma_joint_bias,
+                  const std::map<std::string, std::string>& packages,
+                  const std::map<std::string, double>& joint_stiffness, const std::string& name,
+                  const py::object& provenance, bool overwrite)
+      : num_joints_(static_cast<long>(joint_names.size())), torques_(torques) {
+    SessionInfo info;
+    info.name = name.empty() ? std::filesystem::path(dir).filename().string() : name;
+    if (hand_urdf.empty() || object.empty())
+      throw InputError("SessionWriter: hand_urdf and object are required");
+    info.hand_urdf = hand_urdf;
+    info.object = object;
+    info.packages = packages;
+    for (const auto& [joint, k] : joint_stiffness)
+      if (!(k > 0.0) || !std::isfinite(k))
+        throw InputError("joint_stiffness: " + joint + ": expected a positive stiffness");
+    info.joint_stiffness = joint_stiffness;
+    if (K.has_value() != size.has_value())
+      throw InputError("SessionWriter: give K and image_size (width, height) together");
+    if (K) info.camera = IntrinsicsFrom(*K, size->first, size->second, distortion);
+    info.initial_T_PO = ToTransform(initial_pose, "initial_pose");
+    for (const double sigma : {sigma_position, sigma_orientation, sigma_joint_bias})
+      if (!(sigma > 0.0) || !std::isfinite(sigma))
+        throw InputError("SessionWriter: the sigmas must be positive");
+    info.sigma_position = sigma_position;
+    info.sigma_orientation = sigma_orientation;
+    info.sigma_joint_bias = sigma_joint_bias;
+    if (!provenance.is_none()) {
+      if (!py::isinstance<py::dict>(provenance))
+        throw InputError("provenance: expected a dict (kept as JSON)");
+      info.provenance_json =
+          py::module_::import("json").attr("dumps")(provenance).cast<std::string>();
+    }
+    camera_ = info.camera.has_value();
+    if (camera_) width_ = info.camera->width, height_ = info.camera->height;
+    writer_ =
+        std::make_unique<SessionWriter>(dir, std::move(info), joint_names, overwrite, torques);
+  }
+
+  void AddJointSample(double t, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const std::optional<Eigen::Ref<const Eigen::VectorXd>>& tau) {
+    Writable();
+    if (!std::isfinite(t) || !(t > last_t_))
+      throw InputError("add_joint_sample: t = " + FormatDouble(t) +
+                       ": expected finite and after the previous sample's " +
+                       FormatDouble(last_t_));
+    if (q.size() != num_joints_ || !q.allFinite())
+      throw InputError("q: expected " + std::to_string(num_joints_) + " finite values, got " +
+                       std::to_string(q.size()));
+    if (torques_ && (!tau || tau->size() != num_joints_ || !tau->allFinite()))
+      throw InputError("tau: expected " + std::to_string(num_joints_) +
+                       " finite values (the writer was made with torques=True)");
+    if (!torques_ && tau) throw InputError("tau: the writer was made with torques=False");
+    last_t_ = t;
+    ++samples_;
+    if (torques_)
+      writer_->AddJointSample(t, q, *tau);
+    else
+      writer_->AddJointSample(t, q, Eigen::VectorXd());
+  }
+
+  void AddCameraFrame(
+      double t, const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& image,
+      const Mat4& T_PC) {
+    Writable();
+    if (!camera_) throw InputError("add_camera_frame: the writer was made without K");
+    if (!std::isfinite(t)) throw InputError("add_camera_frame: t is not finite");
+    const Image8 im = ImageFrom(image);
+    if (im.width != width_ || im.height != height_ || im.channels != 3)
+      throw InputError("add_camera_frame: expected a " + std::to_string(height_) + " x " +
+                       std::to_string(width_) + " x 3 image, got " + std::to_string(im.height) +
+                       " x " + std::to_string(im.width) + " x " + std::to_string(im.channels));
+    const Transform T = ToTransform(T_PC, "T_PC");
+    py::gil_scoped_release release;
+    writer_->AddCameraFrame(t, im, T);
+  }
+
+  void AddGroundTruth(double t, const Mat4& T_PO) {
+    Writable();
+    if (!std::isfinite(t)) throw InputError("add_ground_truth: t is not finite");
+    writer_->AddGroundTruth(t, ToTransform(T_PO, "T_PO"));
+  }
+
+  void AddFile(const std::string& relative_path, const std::string& contents) {
+    Writable();
+    const std::filesystem::path p(relative_path);
+    if (p.empty() || p.is_absolute() ||
+        std::any_of(p.begin(), p.end(), [](const std::filesystem::path& c) { return c == ".."; }))
+      throw InputError("add_file: " + relative_path + ": expected a path inside the session");
+    writer_->AddFile(relative_path, contents);
+  }
+
+  void Commit() {
+    Writable();
+    if (samples_ < 2) throw InputError("commit: a session needs at least two joint samples");
+    py::gil_scoped_release release;
+    writer_->Commit();
+    writer_.reset();
+    committed_ = true;
+  }
+
+  // Drops everything written (the session never appears).
+  void Discard() { writer_.reset(); }
+
+ private:
+  void Writable() const {
+    if (!writer_)
+      throw InputError(committed_ ? "SessionWriter: already committed"
+                                  : "SessionWriter: discarded");
+  }
+
+  long num_joints_;
+  bool torques_;
+  bool camera_ = false;
+  int width_ = 0, height_ = 0;
+  double last_t_ = -std::numeric_limits<double>::infinity();
+  long samples_ = 0;
+  bool committed_ = false;
+  std::unique_ptr<SessionWriter> writer_;
+};
 
 // The Tracker with the models it refers to kept alive by Python (keep_alive on construction),
 // and the joint vectors checked against the hand before they reach it.
@@ -339,6 +546,44 @@ PYBIND11_MODULE(inhand, m) {
             return py::cast(std::vector<double>(d.begin(), d.end()));
           },
           "k1 k2 p1 p2 k3 (OpenCV's model), or None without a camera.")
+      .def_property_readonly("name", [](const Session& s) { return s.info().name; })
+      .def_property_readonly(
+          "hand_urdf",
+          [](const Session& s) {
+            return std::filesystem::absolute(s.Resolve(s.info().hand_urdf)).string();
+          },
+          "The hand's URDF (absolute path).")
+      .def_property_readonly(
+          "object_file",
+          [](const Session& s) {
+            return std::filesystem::absolute(s.Resolve(s.info().object)).string();
+          },
+          "The object description (absolute path).")
+      .def_property_readonly("packages", [](const Session& s) { return s.info().packages; })
+      .def_property_readonly("joint_stiffness",
+                             [](const Session& s) { return s.info().joint_stiffness; })
+      .def_property_readonly(
+          "provenance",
+          [](const Session& s) {
+            return py::module_::import("json").attr("loads")(s.info().provenance_json);
+          },
+          "Where the session comes from (simulator, scenario, seed...), as a dict.")
+      .def_property_readonly(
+          "image_size",
+          [](const Session& s) -> py::object {
+            if (!s.info().camera) return py::none();
+            return py::make_tuple(s.info().camera->width, s.info().camera->height);
+          },
+          "(width, height) of the camera images, or None without a camera.")
+      .def_property_readonly(
+          "truth_samples",
+          [](const Session& s) {
+            py::list out;
+            for (const GroundTruthSample& g : s.groundtruth())
+              out.append(py::make_tuple(g.t, Mat4(g.T_PO.matrix())));
+            return out;
+          },
+          "groundtruth.csv as a list of (t, T_PO); empty without ground truth.")
       .def_property_readonly(
           "initial_pose", [](const Session& s) -> Mat4 { return s.info().initial_T_PO.matrix(); })
       .def_property_readonly("sigma_position",
@@ -366,6 +611,150 @@ PYBIND11_MODULE(inhand, m) {
                                   models.joint_columns);
           },
           "(hand, object, columns): the session's models; q[:, columns] is in the hand's order.");
+
+  py::class_<PySessionWriter>(
+      m, "SessionWriter",
+      "Writes a session (sessions/FORMAT.md) into a temporary folder beside dir and moves it into "
+      "place on commit(): an uncommitted or failed writer leaves nothing. As a context manager it "
+      "commits when the block ends without an exception and discards otherwise. Paths in "
+      "session.json are written as given: absolute, or relative to the session folder.")
+      .def(py::init<const std::string&, const std::string&, const std::string&,
+                    const std::vector<std::string>&, bool, const std::optional<Mat3>&,
+                    const std::optional<std::pair<int, int>>&, const std::vector<double>&,
+                    const Mat4&, double, double, double, const std::map<std::string, std::string>&,
+                    const std::map<std::string, double>&, const std::string&, const py::object&,
+                    bool>(),
+           py::arg("dir"), py::arg("hand_urdf"), py::arg("object"), py::arg("joint_names"),
+           py::kw_only(), py::arg("torques") = true, py::arg("K") = py::none(),
+           py::arg("image_size") = py::none(), py::arg("distortion") = std::vector<double>{},
+           py::arg("initial_pose") = Mat4(Mat4::Identity()), py::arg("sigma_position") = 0.020,
+           py::arg("sigma_orientation") = 5.0 * M_PI / 180,
+           py::arg("sigma_joint_bias") = 5.0 * M_PI / 180,
+           py::arg("packages") = std::map<std::string, std::string>{},
+           py::arg("joint_stiffness") = std::map<std::string, double>{}, py::arg("name") = "",
+           py::arg("provenance") = py::none(), py::arg("overwrite") = false)
+      .def("add_joint_sample", &PySessionWriter::AddJointSample, py::arg("t"), py::arg("q"),
+           py::arg("tau") = py::none(),
+           "A joint sample in joint_names' order (times strictly increasing); tau when the writer "
+           "has torques.")
+      .def("add_camera_frame", &PySessionWriter::AddCameraFrame, py::arg("t"), py::arg("image"),
+           py::arg("T_PC"), "An RGB image of image_size (written as PNG) and its camera pose.")
+      .def("add_ground_truth", &PySessionWriter::AddGroundTruth, py::arg("t"), py::arg("T_PO"))
+      .def("add_file", &PySessionWriter::AddFile, py::arg("relative_path"), py::arg("contents"),
+           "Any extra text file inside the session.")
+      .def("commit", &PySessionWriter::Commit,
+           "Writes session.json and moves the session into place.")
+      .def("discard", &PySessionWriter::Discard, "Drops the session written so far.")
+      .def("__enter__", [](PySessionWriter& w) -> PySessionWriter& { return w; })
+      .def("__exit__",
+           [](PySessionWriter& w, const py::object& type, const py::object&, const py::object&) {
+             if (type.is_none())
+               w.Commit();
+             else
+               w.Discard();
+             return false;
+           });
+
+  m.def(
+      "scenarios",
+      [] {
+        py::list out;
+        for (const ScenarioInfo& s : ListScenarios()) {
+          py::dict d;
+          d["name"] = s.name;
+          d["description"] = s.description;
+          d["duration"] = s.duration;
+          out.append(d);
+        }
+        return out;
+      },
+      "The simulator's scenarios: name, description, duration [s].");
+  m.def(
+      "simulate",
+      [](const std::string& scenario, const std::string& out, unsigned seed,
+         const std::string& noise, bool images, bool overwrite, const std::string& effects,
+         const std::string& without) {
+        app::SimulateCommand cmd;
+        cmd.scenario = scenario;
+        cmd.out = out;
+        cmd.seed = seed;
+        cmd.noise = noise;
+        cmd.no_images = !images;
+        cmd.overwrite = overwrite;
+        cmd.effects = effects;
+        cmd.without = without;
+        const SimulateOptions options = app::SimulateOptionsOf(cmd);
+        SimulationSummary summary;
+        {
+          py::gil_scoped_release release;
+          summary = Simulate(options);
+        }
+        return SimulationDict(summary);
+      },
+      py::arg("scenario"), py::arg("out"), py::kw_only(), py::arg("seed") = 1u,
+      py::arg("noise") = "paper", py::arg("images") = true, py::arg("overwrite") = false,
+      py::arg("effects") = "", py::arg("without") = "",
+      "Simulates a scenario into the session folder out, as `inhand simulate`; returns what it "
+      "measured (duration, samples, frames, penetration, held fraction, rotation, lift).");
+  m.def(
+      "replay",
+      [](const std::string& session, const std::string& out, const std::string& sets,
+         const py::object& params, bool video, bool frames, bool timeline, bool mcap, int jobs) {
+        const ParamsFile params_file(params);
+        app::ReplayCommand cmd;
+        cmd.session = session;
+        cmd.out = out;
+        cmd.modalities = sets;
+        cmd.params = params_file.path();
+        cmd.no_video = !video;
+        cmd.frames = frames;
+        cmd.no_timeline = !timeline;
+        cmd.mcap = mcap;
+        cmd.jobs = jobs;
+        int code = 0;
+        {
+          py::gil_scoped_release release;
+          code = app::RunReplay(cmd);
+        }
+        if (code != 0) throw InputError("replay: failed with code " + std::to_string(code));
+        return JsonFile((std::filesystem::path(out) / "summary.json").string());
+      },
+      py::arg("session"), py::arg("out"), py::kw_only(), py::arg("sets") = "",
+      py::arg("params") = py::none(), py::arg("video") = true, py::arg("frames") = false,
+      py::arg("timeline") = true, py::arg("mcap") = false, py::arg("jobs") = 2,
+      "Replays a session with each set (\"\": every set it supports) into out, as `inhand "
+      "replay`; returns summary.json as a dict. params: None, a dict, JSON text or a path.");
+  m.def(
+      "evaluate",
+      [](const std::string& out, const std::string& scenarios, int seeds, int first_seed,
+         const std::string& noise, const std::string& sets, const py::object& params, int jobs,
+         bool keep_sessions, const std::string& inhand_binary) {
+        const ParamsFile params_file(params);
+        app::EvaluateCommand cmd;
+        cmd.out = out;
+        cmd.scenarios = scenarios;
+        cmd.seeds = seeds;
+        cmd.first_seed = first_seed;
+        cmd.noise = noise;
+        cmd.modalities = sets;
+        cmd.params = params_file.path();
+        cmd.jobs = jobs;
+        cmd.keep_sessions = keep_sessions;
+        const std::string binary = InhandBinary(inhand_binary);
+        int code = 0;
+        {
+          py::gil_scoped_release release;
+          code = app::RunEvaluate(cmd, binary);
+        }
+        if (code != 0) throw InputError("evaluate: failed with code " + std::to_string(code));
+        return JsonFile((std::filesystem::path(out) / "table1.json").string());
+      },
+      py::arg("out"), py::kw_only(), py::arg("scenarios") = "", py::arg("seeds") = 5,
+      py::arg("first_seed") = 1, py::arg("noise") = "paper", py::arg("sets") = "j,jt,jta,jtf",
+      py::arg("params") = py::none(), py::arg("jobs") = 2, py::arg("keep_sessions") = false,
+      py::arg("inhand_binary") = "",
+      "Simulates and replays every scenario x seed (as `inhand evaluate`, runs in parallel "
+      "processes of the inhand command) into out; returns table1.json as a dict.");
 
   py::class_<PyTracker>(m, "Tracker",
                         "The online estimator of one set (j, jt, jta, jtf, ...). Joint samples at "

@@ -7,13 +7,7 @@
 
 namespace inhand::app {
 
-int RunSimulate(const SimulateCommand& cmd) {
-  if (cmd.list) {
-    for (const ScenarioInfo& s : ListScenarios())
-      std::cout << std::left << std::setw(22) << s.name << std::right << std::setw(5) << std::fixed
-                << std::setprecision(1) << s.duration << " s  " << s.description << "\n";
-    return 0;
-  }
+SimulateOptions SimulateOptionsOf(const SimulateCommand& cmd) {
   if (cmd.scenario.empty())
     throw InputError("simulate: give a SCENARIO (see inhand simulate --list)");
   if (cmd.out.empty()) throw InputError("simulate: --out DIR is required");
@@ -29,6 +23,17 @@ int RunSimulate(const SimulateCommand& cmd) {
     if (!cmd.without.empty()) e = e.Without(Effects::Parse(cmd.without, "--without"));
     options.effects = e;
   }
+  return options;
+}
+
+int RunSimulate(const SimulateCommand& cmd) {
+  if (cmd.list) {
+    for (const ScenarioInfo& s : ListScenarios())
+      std::cout << std::left << std::setw(22) << s.name << std::right << std::setw(5) << std::fixed
+                << std::setprecision(1) << s.duration << " s  " << s.description << "\n";
+    return 0;
+  }
+  const SimulateOptions options = SimulateOptionsOf(cmd);
   const SimulationSummary s = Simulate(options);
   std::cout << std::fixed << std::setprecision(3) << "session " << s.session_dir << ": "
             << s.duration << " s simulated in " << s.wall_time << " s (" << s.wall_time / s.duration

@@ -5,6 +5,7 @@ Run by ctest (python_module) with PYTHONPATH set to the module's folder and INHA
 inhand command.
 """
 import csv
+import json
 import os
 import subprocess
 import tempfile
@@ -48,7 +49,7 @@ class Fixture:
         self.session_dir = os.path.join(self.tmp.name, "session")
         run("simulate", "ketchup-power-grasp", "--seed", "3", "--noise", "paper", "--out",
             self.session_dir)
-        replay = os.path.join(self.tmp.name, "replay")
+        self.replay_dir = replay = os.path.join(self.tmp.name, "replay")
         run("replay", self.session_dir, "--modalities", "j,jt,jta,jtf", "--no-video", "--out", replay)
         self.rows = {}
         with open(os.path.join(replay, "estimates.csv"), newline="") as f:
@@ -189,6 +190,145 @@ class BadInput(unittest.TestCase):
             tracker.add_joint_sample(0.01, np.zeros(3))
         with self.assertRaisesRegex(ValueError, "image: expected"):
             tracker.add_image(0.01, np.zeros((4, 4, 5), np.uint8), np.eye(4), f.session.K)
+
+
+def read_rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+class Commands(unittest.TestCase):
+    """simulate, replay and evaluate as functions, against the command line's own runs."""
+
+    def test_simulate_writes_the_commands_session(self):
+        f = Fixture.get()
+        out = os.path.join(f.tmp.name, "simulated-from-python")
+        summary = inhand.simulate("ketchup-power-grasp", out, seed=3, noise="paper", images=False)
+        self.assertEqual(summary["joint_samples"], len(f.session.t))
+        self.assertEqual(summary["camera_frames"], 0, "images=False")
+        self.assertGreater(summary["held_fraction"], 0.9)
+        # The same seed and noise: the command's joints and truth, byte for byte (images do not
+        # draw from the physics' random numbers).
+        for name in ("joints.csv", "groundtruth.csv"):
+            with open(os.path.join(out, name)) as a, open(os.path.join(f.session_dir, name)) as b:
+                self.assertEqual(a.read(), b.read(), name)
+        self.assertEqual(inhand.Session(out).provenance["seed"], 3)
+        with self.assertRaisesRegex(ValueError, "already exists"):
+            inhand.simulate("ketchup-power-grasp", out, images=False)
+        with self.assertRaisesRegex(ValueError, "no-such-scenario"):
+            inhand.simulate("no-such-scenario", os.path.join(f.tmp.name, "x"))
+        self.assertIn("pen-fingertip", [s["name"] for s in inhand.scenarios()])
+
+    def test_replay_returns_the_summary_it_writes(self):
+        f = Fixture.get()
+        out = os.path.join(f.tmp.name, "replayed-from-python")
+        # Parameters as a dict: the defaults but a wider contact σ, which must change jt.
+        summary = inhand.replay(f.session_dir, out, sets="jt", video=False,
+                                params={"contact_sigma": 0.03})
+        with open(os.path.join(out, "summary.json")) as fh:
+            self.assertEqual(summary, json.load(fh))
+        with open(os.path.join(out, "params.json")) as fh:
+            self.assertEqual(json.load(fh)["contact_sigma"], 0.03)
+        with open(os.path.join(f.replay_dir, "summary.json")) as fh:
+            command = json.load(fh)["modalities"]["jt"]
+        self.assertNotEqual(summary["modalities"]["jt"]["terminal_position_error_mm"],
+                            command["terminal_position_error_mm"])
+        # The default parameters: the command's estimates exactly.
+        out = os.path.join(f.tmp.name, "replayed-defaults")
+        summary = inhand.replay(f.session_dir, out, sets="jt", video=False)
+        self.assertEqual(summary["modalities"]["jt"]["terminal_position_error_mm"],
+                         command["terminal_position_error_mm"])
+        mine = [r for r in read_rows(os.path.join(out, "estimates.csv"))]
+        self.assertEqual([r["px"] for r in mine], [r["px"] for r in f.rows["jt"]])
+        with self.assertRaisesRegex(ValueError, "unknown parameter 'contact_sigmaa'"):
+            inhand.replay(f.session_dir, os.path.join(f.tmp.name, "y"), video=False,
+                          params='{"contact_sigmaa": 1}')
+
+    def test_evaluate_returns_table1(self):
+        f = Fixture.get()
+        out = os.path.join(f.tmp.name, "evaluated-from-python")
+        table = inhand.evaluate(out, scenarios="ketchup-power-grasp", seeds=1, first_seed=3,
+                                sets="j,jt", jobs=1)
+        with open(os.path.join(f.replay_dir, "summary.json")) as fh:
+            command = json.load(fh)["modalities"]
+        for set_name in ("j", "jt"):
+            row = table["ketchup-power-grasp"][set_name]
+            self.assertEqual(row["runs"], 1)
+            self.assertAlmostEqual(row["position_mm_mean"],
+                                   command[set_name]["terminal_position_error_mm"], places=9)
+        self.assertTrue(os.path.exists(os.path.join(out, "fig7_ketchup-power-grasp.png")))
+
+
+class WriterFromPython(unittest.TestCase):
+    def test_a_session_copied_through_python_replays_the_same(self):
+        f = Fixture.get()
+        s = f.session
+        out = os.path.join(f.tmp.name, "copied")
+        with inhand.SessionWriter(out, s.hand_urdf, s.object_file, s.joint_names, K=s.K,
+                                  image_size=s.image_size, distortion=s.distortion,
+                                  initial_pose=s.initial_pose, sigma_position=s.sigma_position,
+                                  sigma_orientation=s.sigma_orientation,
+                                  sigma_joint_bias=s.sigma_joint_bias, packages=s.packages,
+                                  joint_stiffness=s.joint_stiffness, name=s.name,
+                                  provenance=s.provenance) as w:
+            for k in range(len(s.t)):
+                w.add_joint_sample(s.t[k], s.q[k], s.tau[k])
+            for i, t in enumerate(s.frame_times):
+                w.add_camera_frame(t, s.image(i), s.camera_pose(i))
+            for t, T in s.truth_samples:
+                w.add_ground_truth(t, T)
+            self.assertFalse(os.path.exists(out), "nothing appears before the commit")
+        with open(os.path.join(out, "joints.csv")) as a, open(os.path.join(s.dir, "joints.csv")) as b:
+            self.assertEqual(a.read(), b.read())
+        copy = inhand.Session(out)
+        self.assertEqual(copy.name, s.name)
+        np.testing.assert_array_equal(copy.image(7), s.image(7))
+        for i in range(len(s.frame_times)):
+            np.testing.assert_allclose(copy.camera_pose(i), s.camera_pose(i), rtol=0, atol=1e-15)
+        replay = os.path.join(f.tmp.name, "copied-replay")
+        inhand.replay(out, replay, sets="j,jt,jta,jtf", video=False)
+        rows = read_rows(os.path.join(replay, "estimates.csv"))
+        original = [r for set_name in ("j", "jt", "jta", "jtf") for r in f.rows[set_name]]
+        rows.sort(key=lambda r: ("j", "jt", "jta", "jtf").index(r["set"]))
+        self.assertEqual(len(rows), len(original))
+        # Joints and torques are byte-identical: j and jt estimate the same poses. The camera
+        # poses pass a 4x4 matrix, so their quaternions may move in the last digit: the vision
+        # sets agree within a micrometre.
+        for a, b in zip(rows, original):
+            bound = 0.0 if a["set"] in ("j", "jt") else 1e-6
+            for c in ("px", "py", "pz", "qw", "qx", "qy", "qz"):
+                self.assertLessEqual(abs(float(a[c]) - float(b[c])), bound, (a["set"], a["t"], c))
+
+    def test_bad_input_and_an_exception_leave_nothing(self):
+        f = Fixture.get()
+        s = f.session
+        out = os.path.join(f.tmp.name, "never-written")
+        names = s.joint_names
+        with self.assertRaisesRegex(RuntimeError, "boom"):
+            with inhand.SessionWriter(out, s.hand_urdf, s.object_file, names) as w:
+                w.add_joint_sample(0.0, np.zeros(len(names)), np.zeros(len(names)))
+                w.add_joint_sample(0.1, np.zeros(len(names)), np.zeros(len(names)))
+                raise RuntimeError("boom")
+        self.assertFalse(os.path.exists(out))
+        self.assertEqual([p for p in os.listdir(f.tmp.name) if "never-written" in p], [])
+        w = inhand.SessionWriter(out, s.hand_urdf, s.object_file, names, torques=False)
+        w.add_joint_sample(0.0, np.zeros(len(names)))
+        with self.assertRaisesRegex(ValueError, "after the previous sample"):
+            w.add_joint_sample(0.0, np.zeros(len(names)))
+        with self.assertRaisesRegex(ValueError, rf"q: expected {len(names)} finite values, got 2"):
+            w.add_joint_sample(0.1, np.zeros(2))
+        with self.assertRaisesRegex(ValueError, "tau: the writer was made with torques=False"):
+            w.add_joint_sample(0.1, np.zeros(len(names)), np.zeros(len(names)))
+        with self.assertRaisesRegex(ValueError, "the writer was made without K"):
+            w.add_camera_frame(0.1, np.zeros((480, 640, 3), np.uint8), np.eye(4))
+        with self.assertRaisesRegex(ValueError, "expected a path inside the session"):
+            w.add_file("../outside.txt", "x")
+        with self.assertRaisesRegex(ValueError, "at least two joint samples"):
+            w.commit()
+        with self.assertRaisesRegex(ValueError, "give K and image_size"):
+            inhand.SessionWriter(out, s.hand_urdf, s.object_file, names, K=s.K)
+        with self.assertRaisesRegex(ValueError, "already exists"):
+            inhand.SessionWriter(s.dir, s.hand_urdf, s.object_file, names)
 
 
 if __name__ == "__main__":

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "inhand/sessions/simulator.hpp"
+
 namespace inhand::app {
 
 struct ModelCommand {
@@ -38,6 +40,9 @@ struct SimulateCommand {
   std::string effects, without;  // realism effects (sessions/realism.hpp), comma-separated
 };
 int RunSimulate(const SimulateCommand& cmd);
+// The simulator's options for `cmd` (not `list`), checked: scenario and output given, the noise
+// profile and realism effects known. Throws InputError.
+SimulateOptions SimulateOptionsOf(const SimulateCommand& cmd);
 
 struct ImportCommand {
   std::string recording;
