@@ -33,3 +33,31 @@ configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/inhandConfig.cmake.in
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/inhandConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/inhandConfig.cmake ${PROJECT_BINARY_DIR}/inhandConfigVersion.cmake
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/inhand)
+
+# The tool: the inhand command, the project's hand and objects (the simulator finds them in
+# PREFIX/share/inhand/assets from the executable or the Python module), the format's text.
+install(TARGETS inhand RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/assets/hands ${PROJECT_SOURCE_DIR}/assets/objects
+  DESTINATION ${CMAKE_INSTALL_DATADIR}/inhand/assets)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/sessions/FORMAT.md
+  DESTINATION ${CMAKE_INSTALL_DOCDIR})
+
+# `cpack -G DEB` in the build folder: one Debian package with all of the above under /usr. Its
+# Depends come from dpkg-shlibdeps (the shared libraries the command and the module link), plus
+# the interpreter and NumPy the module needs.
+set(CPACK_PACKAGE_NAME inhand)
+set(CPACK_PACKAGE_VENDOR "inhand")
+set(CPACK_PACKAGE_CONTACT "inhand developers <inhand@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
+  "in-hand object pose estimation (joints, torques, tags, image features) and its visual debugger")
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION science)
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+if(INHAND_BUILD_PYTHON)
+  # The module is built for one interpreter version (its ABI): python3 of that version only.
+  math(EXPR INHAND_NEXT_PYTHON_MINOR "${Python3_VERSION_MINOR} + 1")
+  set(CPACK_DEBIAN_PACKAGE_DEPENDS "python3 (>= ${Python3_VERSION_MAJOR}.${Python3_VERSION_MINOR}), \
+python3 (<< ${Python3_VERSION_MAJOR}.${INHAND_NEXT_PYTHON_MINOR}), python3-numpy")
+endif()
+include(CPack)

@@ -1,10 +1,13 @@
 #include "sim_setup.hpp"
 
+#include <dlfcn.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 
+#include "inhand/core/error.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/renderer/views.hpp"
@@ -71,7 +74,30 @@ std::pair<double, double> StartError(const Noise& n, Scenario::Start start) {
 
 std::string AssetDir() {
   if (const char* env = std::getenv("INHAND_ASSETS"); env && *env) return env;
-  return INHAND_ASSET_DIR;
+  // Installed: the file holding this code is PREFIX/bin/inhand or the Python module in
+  // PREFIX/lib/python3.X/dist-packages; the assets are in PREFIX/share/inhand/assets.
+  // dladdr names a shared object by its path, the main program only as it was invoked (argv[0],
+  // a bare name when found on PATH): the program's path comes from /proc/self/exe.
+  std::vector<fs::path> tried;
+  std::string self = "/proc/self/exe";
+  Dl_info info{};
+  if (::dladdr(reinterpret_cast<void*>(&AssetDir), &info) != 0 && info.dli_fname &&
+      std::string(info.dli_fname).find('/') != std::string::npos)
+    self = info.dli_fname;
+  std::error_code ec;
+  const fs::path file = fs::canonical(self, ec);
+  if (!ec)
+    for (const char* up : {"..", "../../.."}) {
+      const fs::path dir = (file.parent_path() / up / "share/inhand/assets").lexically_normal();
+      if (fs::is_directory(dir / "hands")) return dir.string();
+      tried.push_back(dir);
+    }
+  // The build tree: the source tree's assets.
+  if (fs::is_directory(fs::path(INHAND_ASSET_DIR) / "hands")) return INHAND_ASSET_DIR;
+  std::string message = "the project's assets (hands/, objects/) are not in";
+  for (const fs::path& p : tried) message += " " + p.string() + ",";
+  throw InputError(message + " nor in " + INHAND_ASSET_DIR +
+                   "; set INHAND_ASSETS to the folder that holds them");
 }
 
 std::string ReadBinary(const fs::path& p) {

@@ -45,7 +45,9 @@ Noise NoiseFor(NoiseProfile p);
 // position is off by the hand-set amount straight up and the orientation still by the tracker's.
 std::pair<double, double> StartError(const Noise& n, Scenario::Start start);
 
-// The project's assets: $INHAND_ASSETS when set, else the source tree's.
+// The project's assets: $INHAND_ASSETS when set, else an installation's PREFIX/share/inhand/
+// assets (found from the executable or Python module holding this code), else the source
+// tree's. Throws InputError naming the places tried.
 std::string AssetDir();
 
 // A file's bytes (empty when it cannot be read).
