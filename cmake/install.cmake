@@ -59,5 +59,7 @@ if(INHAND_BUILD_PYTHON)
   math(EXPR INHAND_NEXT_PYTHON_MINOR "${Python3_VERSION_MINOR} + 1")
   set(CPACK_DEBIAN_PACKAGE_DEPENDS "python3 (>= ${Python3_VERSION_MAJOR}.${Python3_VERSION_MINOR}), \
 python3 (<< ${Python3_VERSION_MAJOR}.${INHAND_NEXT_PYTHON_MINOR}), python3-numpy")
+  # evaluate draws its plots with matplotlib when it is there.
+  set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")
 endif()
 include(CPack)

@@ -21,6 +21,8 @@ PACKAGES=(
   python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs python3-nav-msgs
   # The Python module (import inhand): pybind11 over the Tracker and sessions, NumPy arrays.
   pybind11-dev python3-dev python3-numpy
+  # The evaluation's plots (app/python/inhand_plots.py).
+  python3-matplotlib
 )
 # Node.js for the official MCAP / ROS 2 tools (npm packages below): Debian's, unless a Node.js
 # with npm is installed already (its package conflicts with Debian's npm).

@@ -104,6 +104,7 @@ class SessionWriter:
 
 Params = Union[None, str, Dict[str, Any], os.PathLike]
 
+def set_colour(set: str) -> Tuple[int, int, int]: ...
 def scenarios() -> List[Dict[str, Any]]: ...
 def simulate(
     scenario: str,

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "inhand/app/commands.hpp"
+#include "inhand/app/modalities.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
@@ -655,6 +656,15 @@ PYBIND11_MODULE(inhand, m) {
              return false;
            });
 
+  m.def(
+      "set_colour",
+      [](const std::string& set) {
+        const Rgb c = app::ModalityColour(set);
+        return py::make_tuple(c.r, c.g, c.b);
+      },
+      py::arg("set"),
+      "A set's colour in every picture and plot, (r, g, b) 0-255: the paper's for j, jt, jta, "
+      "jtf; the truth's for a name that is no set.");
   m.def(
       "scenarios",
       [] {

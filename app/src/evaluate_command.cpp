@@ -10,17 +10,15 @@
 #include <map>
 #include <sstream>
 
-#include <opencv2/imgproc.hpp>
-
 #include "inhand/app/commands.hpp"
 #include "inhand/app/modalities.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/filter/contact_model.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/io/object_loader.hpp"
-#include "inhand/renderer/overlay.hpp"
-#include "inhand/sessions/image_io.hpp"
+#include "inhand/sessions/install_dirs.hpp"
 #include "inhand/sessions/output_folder.hpp"
+#include "inhand/sessions/session.hpp"
 #include "inhand/sessions/simulator.hpp"
 #include "inhand/tracker/tracker_params.hpp"
 
@@ -85,12 +83,10 @@ Stat Stats(const std::vector<double>& v) {
   return s;
 }
 
-// Fig. 7: change of x, y, z [mm] and roll, pitch, yaw [deg] over time (truth dashed black,
-// each set in its colour), from one run; and the terminal errors of all runs as bars.
-void PlotScenario(const std::string& scenario, const std::string& run_dir,
-                  const std::map<std::string, std::pair<Stat, Stat>>& bars,
-                  const std::string& path) {
-  // Truth and estimates of the first seed.
+// Fig. 7's data from one run: the change of x, y, z [mm] and roll, pitch, yaw [deg] from the
+// truth's start over time, of the truth and of each set, as fig7_SCENARIO.csv (t, series, the six
+// changes; angles wrapped to ±180°). inhand_plots draws it.
+void WriteFig7Data(const std::string& run_dir, const std::string& path) {
   std::map<std::string, std::vector<std::pair<double, Vec6>>> series;  // set -> (t, pose6)
   const auto pose6 = [](const Transform& T) {
     Vec6 v;
@@ -123,83 +119,43 @@ void PlotScenario(const std::string& scenario, const std::string& run_dir,
                       Quat(std::stod(f[5]), std::stod(f[6]), std::stod(f[7]), std::stod(f[8])));
     series[f[1]].emplace_back(std::stod(f[0]), pose6(T));
   }
-  const int W = 1500, H = 900, cols = 3;
-  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
-  const char* names[6] = {"x [mm]", "y [mm]", "z [mm]", "roll [deg]", "pitch [deg]", "yaw [deg]"};
   const Vec6 start = series["truth"].empty() ? Vec6::Zero() : series["truth"].front().second;
-  for (int a = 0; a < 6; ++a) {
-    const cv::Rect box(60 + (a % cols) * 480, 40 + (a / cols) * 280, 420, 220);
-    double lo = 1e9, hi = -1e9, t0 = 1e9, t1 = -1e9;
-    for (const auto& [set, s] : series)
-      for (const auto& [t, v] : s) {
+  std::ofstream out(path);
+  out << "t,series,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\n";
+  for (const auto& [name, samples] : series)
+    for (const auto& [t, v] : samples) {
+      out << FormatDouble(t) << "," << name;
+      for (int a = 0; a < 6; ++a) {
         double d = v[a] - start[a];
         if (a >= 3) d = std::remainder(d, 360.0);
-        lo = std::min(lo, d), hi = std::max(hi, d), t0 = std::min(t0, t), t1 = std::max(t1, t);
+        out << "," << FormatDouble(d);
       }
-    if (hi - lo < 1e-6) hi = lo + 1;
-    const double pad = 0.08 * (hi - lo);
-    lo -= pad, hi += pad;
-    cv::rectangle(img, box, cv::Scalar(120, 120, 120), 1);
-    cv::putText(img, std::string("change in ") + names[a], cv::Point(box.x, box.y - 8),
-                cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    std::ostringstream lo_s, hi_s;
-    lo_s << std::fixed << std::setprecision(1) << lo;
-    hi_s << std::fixed << std::setprecision(1) << hi;
-    cv::putText(img, hi_s.str(), cv::Point(box.x - 55, box.y + 10), cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
-    cv::putText(img, lo_s.str(), cv::Point(box.x - 55, box.y + box.height),
-                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
-    const auto to_px = [&](double t, double v) {
-      return cv::Point(box.x + static_cast<int>((t - t0) / (t1 - t0) * box.width),
-                       box.y + box.height - static_cast<int>((v - lo) / (hi - lo) * box.height));
-    };
-    std::vector<std::string> order;  // every set, then the truth on top
-    for (const auto& entry : series)
-      if (entry.first != "truth") order.push_back(entry.first);
-    order.push_back("truth");
-    for (const std::string& set : order) {
-      auto it = series.find(set);
-      if (it == series.end()) continue;
-      const Rgb c = ModalityColour(set);
-      const cv::Scalar col(c.r, c.g, c.b);
-      cv::Point prev(-1, -1);
-      int k = 0;
-      for (const auto& [t, v] : it->second) {
-        double d = v[a] - start[a];
-        if (a >= 3) d = std::remainder(d, 360.0);
-        const cv::Point q = to_px(t, d);
-        if (prev.x >= 0 && (set != "truth" || (k / 6) % 2 == 0))
-          cv::line(img, prev, q, col, set == "truth" ? 2 : 1, cv::LINE_AA);
-        prev = q;
-        ++k;
-      }
+      out << "\n";
     }
-    cv::putText(img, "t [s]", cv::Point(box.x + box.width - 30, box.y + box.height + 16),
-                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
+}
+
+// Draws the plots with matplotlib (python3 -m inhand_plots OUT): the module beside the running
+// code (build/python from build/bin; PREFIX/lib/python3.X/dist-packages from PREFIX/bin; the
+// Python module's own folder). The tables stand without them: a missing plotter is a warning.
+void DrawPlots(const std::string& out) {
+  const std::string python = INHAND_PYTHON_EXECUTABLE;
+  std::string dir;
+  if (const fs::path here = RunningCodeDir(); !here.empty() && !python.empty())
+    for (const fs::path& d : {here / "../python", here / ".." / INHAND_PYTHON_INSTALL_DIR, here})
+      if (fs::is_regular_file(d / "inhand_plots.py")) {
+        dir = fs::canonical(d).string();
+        break;
+      }
+  if (dir.empty()) {
+    std::cerr << "evaluate: no plots: this build has no Python module (inhand_plots)\n";
+    return;
   }
-  // Bars: mean ± std terminal errors of all seeds.
-  int x = 60;
-  const int base = 880, scale_mm = 4, scale_deg = 4;
-  cv::putText(
-      img, scenario + ": terminal errors over all seeds (left mm, right deg; paper colours)",
-      cv::Point(60, 615), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  for (const auto& [set, st] : bars) {
-    const Rgb c = ModalityColour(set);
-    const cv::Scalar col(c.r, c.g, c.b);
-    const int hp = std::min(240, static_cast<int>(st.first.mean * scale_mm)),
-              ho = std::min(240, static_cast<int>(st.second.mean * scale_deg));
-    cv::rectangle(img, cv::Rect(x, base - hp, 30, hp), col, cv::FILLED);
-    cv::rectangle(img, cv::Rect(x + 34, base - ho, 30, ho), col, 1);
-    std::ostringstream label;
-    label << set << ": " << std::fixed << std::setprecision(1) << st.first.mean << " mm, "
-          << st.second.mean << " deg";
-    cv::putText(img, label.str(), cv::Point(x, base + 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    x += 300;
-  }
-  Image8 out(W, H, 3);
-  for (int y = 0; y < H; ++y) std::copy_n(img.ptr<std::uint8_t>(y), W * 3, out.pixel(0, y));
-  WriteImage(path, out);
+  const std::string command = "PYTHONPATH=" + Quote(dir) + " PYTHONDONTWRITEBYTECODE=1 " +
+                              Quote(python) + " -m inhand_plots " + Quote(out);
+  const int status = std::system(command.c_str());
+  if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0))
+    std::cerr << "evaluate: the plots were not drawn (" << command
+              << " failed; the tables are written)\n";
 }
 
 }  // namespace
@@ -294,12 +250,10 @@ void MergeScenario(const EvaluateCommand& cmd, const std::string& s, int last_se
       pen_max[it.key()].push_back(it.value().value("penetration_mm_max", 0.0));
     }
   }
-  std::map<std::string, std::pair<Stat, Stat>> bars;
   for (const ModalitySet& m : ParseModalities(cmd.modalities)) {
     const std::string& set = m.name;
     if (!pos.count(set)) continue;
     const Stat p = Stats(pos[set]), o = Stats(ori[set]), n = Stats(nees[set]);
-    bars[set] = {p, o};
     // The tail beside the mean: the worst run, and the deepest link inside the estimate (the
     // runs' time-averages averaged; the deepest of any sample of any run).
     const double worst_mm = *std::max_element(pos[set].begin(), pos[set].end());
@@ -337,7 +291,7 @@ void MergeScenario(const EvaluateCommand& cmd, const std::string& s, int last_se
   const std::string first = RunDir(cmd.out, s, cmd.first_seed);
   if (fs::exists(fs::path(first) / "replay/estimates.csv") &&
       fs::exists(fs::path(first) / "session/groundtruth.csv"))
-    PlotScenario(s, first, bars, (fs::path(cmd.out) / ("fig7_" + s + ".png")).string());
+    WriteFig7Data(first, (fs::path(cmd.out) / ("fig7_" + s + ".csv")).string());
 }
 
 int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
@@ -397,6 +351,7 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
   std::ofstream(fs::path(cmd.out) / "table1.md") << md.str();
   std::ofstream(fs::path(cmd.out) / "table1.json") << table.dump(2) << "\n";
   std::cout << md.str();
+  DrawPlots(cmd.out);
   return 0;
 }
 

@@ -1,7 +1,5 @@
 #include "sim_setup.hpp"
 
-#include <dlfcn.h>
-
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -11,6 +9,7 @@
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/renderer/views.hpp"
+#include "inhand/sessions/install_dirs.hpp"
 
 namespace inhand::sim {
 namespace {
@@ -74,21 +73,12 @@ std::pair<double, double> StartError(const Noise& n, Scenario::Start start) {
 
 std::string AssetDir() {
   if (const char* env = std::getenv("INHAND_ASSETS"); env && *env) return env;
-  // Installed: the file holding this code is PREFIX/bin/inhand or the Python module in
-  // PREFIX/lib/python3.X/dist-packages; the assets are in PREFIX/share/inhand/assets.
-  // dladdr names a shared object by its path, the main program only as it was invoked (argv[0],
-  // a bare name when found on PATH): the program's path comes from /proc/self/exe.
+  // Installed: the code is PREFIX/bin/inhand or the Python module in PREFIX/lib/python3.X/
+  // dist-packages; the assets are in PREFIX/share/inhand/assets.
   std::vector<fs::path> tried;
-  std::string self = "/proc/self/exe";
-  Dl_info info{};
-  if (::dladdr(reinterpret_cast<void*>(&AssetDir), &info) != 0 && info.dli_fname &&
-      std::string(info.dli_fname).find('/') != std::string::npos)
-    self = info.dli_fname;
-  std::error_code ec;
-  const fs::path file = fs::canonical(self, ec);
-  if (!ec)
+  if (const fs::path here = RunningCodeDir(); !here.empty())
     for (const char* up : {"..", "../../.."}) {
-      const fs::path dir = (file.parent_path() / up / "share/inhand/assets").lexically_normal();
+      const fs::path dir = (here / up / "share/inhand/assets").lexically_normal();
       if (fs::is_directory(dir / "hands")) return dir.string();
       tried.push_back(dir);
     }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The installed tool, run as a user would: from PATH, in a folder outside the source and build
 # trees. It simulates and replays with the project's hand and objects from PREFIX/share/inhand,
-# and so does the installed Python module; with an object removed from that folder both say
+# evaluate draws its plots with the installed plotting module, and the installed Python module
+# simulates too; with an object removed from that folder both say
 # which file they miss there.
 # usage: check_command.sh BUILD_DIR WORK_DIR PYTHON PYTHON_INSTALL_DIR (the last two may be "")
 set -euo pipefail
@@ -15,6 +16,12 @@ export PATH="$prefix/bin:$PATH"
 inhand simulate pen-fingertip --no-images --out session > simulate.log
 inhand replay session --modalities j,jt --no-video --out replay > replay.log
 grep -q '"jt"' replay/summary.json || { echo "FAIL: replay/summary.json has no jt"; exit 1; }
+if [ -n "$python" ]; then  # evaluate finds the installed plotting module
+  inhand evaluate --out eval --seeds 1 --scenarios pen-fingertip --modalities j > evaluate.log 2>&1 \
+    || { cat evaluate.log; exit 1; }
+  [ -s eval/fig7_pen-fingertip.svg ] && [ -s eval/terminal_errors.pdf ] \
+    || { echo "FAIL: the installed evaluate drew no plots:"; cat evaluate.log; exit 1; }
+fi
 # The installed assets are the ones read: without the pen there, the pen cannot be simulated.
 mv "$prefix/share/inhand/assets/objects/pen" "$work/pen"
 missing="$prefix/share/inhand/assets/objects/pen/object.json"

@@ -192,6 +192,21 @@ class BadInput(unittest.TestCase):
             tracker.add_image(0.01, np.zeros((4, 4, 5), np.uint8), np.eye(4), f.session.K)
 
 
+def svg_axes(path):
+    """Each axes group of a matplotlib SVG: its tick labels and every text in it."""
+    import xml.etree.ElementTree as ET
+    g = "{http://www.w3.org/2000/svg}g"
+    text = "{http://www.w3.org/2000/svg}text"
+
+    def labels(node, prefix):
+        return ["".join(t.itertext()) for e in node.iter(g) if e.get("id", "").startswith(prefix)
+                for t in e.iter(text)]
+
+    return [{"xticks": labels(a, "xtick_"), "yticks": labels(a, "ytick_"),
+             "texts": ["".join(t.itertext()) for t in a.iter(text)]}
+            for a in ET.parse(path).getroot().iter(g) if a.get("id", "").startswith("axes_")]
+
+
 def read_rows(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
@@ -256,7 +271,31 @@ class Commands(unittest.TestCase):
             self.assertEqual(row["runs"], 1)
             self.assertAlmostEqual(row["position_mm_mean"],
                                    command[set_name]["terminal_position_error_mm"], places=9)
-        self.assertTrue(os.path.exists(os.path.join(out, "fig7_ketchup-power-grasp.png")))
+        # The plots, drawn by matplotlib: PNG, PDF and SVG with its text kept as text.
+        for name in ("fig7_ketchup-power-grasp", "terminal_errors"):
+            with open(os.path.join(out, name + ".png"), "rb") as fh:
+                self.assertEqual(fh.read(8), b"\x89PNG\r\n\x1a\n")
+            with open(os.path.join(out, name + ".pdf"), "rb") as fh:
+                self.assertEqual(fh.read(5), b"%PDF-")
+        axes = svg_axes(os.path.join(out, "fig7_ketchup-power-grasp.svg"))
+        legend = [a for a in axes if not a["xticks"]]
+        plots = [a for a in axes if a["xticks"]]
+        self.assertEqual(len(legend), 1, "one legend row")
+        self.assertEqual(legend[0]["texts"], ["j", "jt", "truth"])
+        self.assertEqual(len(plots), 8, "six axes of the pose over time, two of terminal errors")
+        for a in plots:
+            self.assertGreaterEqual(len(a["yticks"]), 3)
+            values = [float(t.replace("\u2212", "-")) for t in a["yticks"]]
+            self.assertEqual(values, sorted(values), "one value axis, increasing")
+        units = [t for a in plots for t in a["texts"] if t.endswith(("[mm]", "[deg]"))]
+        self.assertEqual(len(units), 8, units)
+        self.assertEqual(sum("t [s]" in a["texts"] for a in plots), 6)
+        # The bars' value axis reaches the largest mean it shows.
+        bars = [a for a in plots if "terminal position error, 1 run [mm]" in a["texts"]][0]
+        self.assertEqual(bars["xticks"], ["j", "jt"])
+        top = max(float(t) for t in bars["yticks"])
+        self.assertGreaterEqual(top, max(table["ketchup-power-grasp"][s]["position_mm_mean"]
+                                         for s in ("j", "jt")))
 
 
 class WriterFromPython(unittest.TestCase):
