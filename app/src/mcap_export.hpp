@@ -6,7 +6,7 @@
 // Fig.-1 overlays as foxglove.ImageAnnotations, and the contacts and forces as a
 // foxglove.SceneUpdate. Each set's events (tracker/events.hpp) as foxglove.Log on /inhand/events
 // (name "inhand/SET"; the event's own fields beside the log's), logged at the sample that reported
-// them.
+// them. The file is chunked, zstd-compressed and indexed (ros/mcap_writer.hpp).
 #include <memory>
 #include <string>
 

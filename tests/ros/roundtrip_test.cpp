@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -166,6 +167,24 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   EXPECT_EQ(j.at("topics").at("/inhand/events").at("schema"), "foxglove.Log");
   EXPECT_EQ(j.at("statistics").at("messages"), 6 * n + 4 * frames + events);
   EXPECT_TRUE(j.at("footer").get<bool>());
+  // Read again as a viewer seeks: through the summary, the chunk and message indexes (every CRC
+  // checked), zstd chunks; the same messages per topic, and one second read alone.
+  const std::string indexed_path = dir / "indexed.json";
+  ASSERT_EQ(std::system(("node " + tools + "/check_mcap_indexed.mjs " + (dir / "r/replay.mcap") +
+                         " 7 > " + indexed_path)
+                            .c_str()),
+            0);
+  const nlohmann::json x = nlohmann::json::parse(test::ReadFile(indexed_path));
+  EXPECT_GT(x.at("chunks").get<int>(), 1);
+  EXPECT_EQ(x.at("compressions"), nlohmann::json::array({"zstd"}));
+  for (const auto& [topic, entry] : j.at("topics").items())
+    EXPECT_EQ(x.at("topics").at(topic), entry.at("count")) << topic;
+  EXPECT_EQ(x.at("messages"), j.at("statistics").at("messages"));
+  EXPECT_EQ(x.at("statistics_messages"), x.at("messages"));
+  // 500 Hz: one second holds at least the 500 samples' poses of each set.
+  EXPECT_GT(x.at("window").at("messages").get<long>(), 2 * 500);
+  std::printf("one second read through the index: %ld messages in %.1f ms\n",
+              x.at("window").at("messages").get<long>(), x.at("window").at("ms").get<double>());
 }
 
 }  // namespace
