@@ -16,6 +16,7 @@
 #include "inhand/renderer/video.hpp"
 #include "inhand/sessions/image_io.hpp"
 #include "inhand/sessions/session.hpp"
+#include "video_probe.hpp"
 
 #include "test_support.hpp"
 
@@ -389,7 +390,7 @@ TEST(Cli, ReplayEndToEnd) {
     if (!named || ++rows > 5000) break;
   }
   EXPECT_GT(rows, 100);
-  const VideoInfo v = ProbeVideo(dir / "replay/replay.mp4");
+  const test::VideoInfo v = test::ProbeVideo(dir / "replay/replay.mp4");
   EXPECT_EQ(v.frames, s.at("camera_frames").get<int>());
   // The panels (480 px) over the timeline strip: an axis (18 px), a lane per set (16 px each)
   // and the legend (18 px).

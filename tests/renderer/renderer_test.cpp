@@ -14,6 +14,7 @@
 #include "inhand/renderer/views.hpp"
 #include "inhand/sessions/image_io.hpp"
 #include "test_support.hpp"
+#include "video_probe.hpp"
 
 namespace inhand {
 namespace {
@@ -525,12 +526,12 @@ TEST(Video, H264FramesRoundTrip) {
     }
     EXPECT_EQ(w.frames(), 12);
   }
-  const VideoInfo info = ProbeVideo(path);
+  const test::VideoInfo info = test::ProbeVideo(path);
   EXPECT_EQ(info.frames, 12);
   EXPECT_EQ(info.width, 320);
   EXPECT_EQ(info.height, 240);
   EXPECT_TRUE(info.codec == "avc1" || info.codec == "h264") << info.codec;
-  const Image8 f = ReadVideoFrame(path, 5);
+  const Image8 f = test::ReadVideoFrame(path, 5);
   ASSERT_EQ(f.width, 320);
   EXPECT_NEAR(f.pixel(100, 100)[0], (100 + 50) % 256, 12);  // lossy, but close
   EXPECT_THROW(VideoWriter(dir / "odd.mp4", 30.0, 321, 240), InputError);

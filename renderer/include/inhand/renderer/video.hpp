@@ -26,15 +26,4 @@ class VideoWriter {
   int frames_ = 0;
 };
 
-// Frames and size of a video file (OpenCV), for tests and checks; frames = -1 when unreadable.
-struct VideoInfo {
-  int frames = -1;
-  int width = 0, height = 0;
-  double fps = 0.0;
-  std::string codec;  // fourcc as text, e.g. "h264"
-};
-VideoInfo ProbeVideo(const std::string& path);
-// Decodes frame `index` (RGB); empty image when unavailable.
-Image8 ReadVideoFrame(const std::string& path, int index);
-
 }  // namespace inhand
