@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <deque>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iomanip>
@@ -27,6 +28,8 @@
 #include <sstream>
 #include <thread>
 #include <utility>
+
+#include <nlohmann/json.hpp>
 
 #include "gui_gl.hpp"
 #include "inhand/app/event_palette.hpp"
@@ -77,7 +80,68 @@ struct GuiState {
   std::vector<char> hidden;  // per set: left out of the timeline and the plots (keys 1-9)
   bool help = false;         // the keys' help over the views (h)
   bool Hidden(std::size_t set) const { return set < hidden.size() && hidden[set]; }
+  // The layout (splitters), kept in the user's configuration folder (GuiLayout).
+  float panel_width = 330.0f;  // [px] the left panel
+  float picture_share = 1.0f;  // of the views' width, the composed picture's (its aspect kept)
+  bool layout_changed = false;
 };
+
+// The layout's bounds: the panel keeps its controls readable and leaves the views 300 px; the
+// picture keeps at least a fifth of the views' width.
+constexpr float kMinPanelWidth = 220.0f, kMinViewsWidth = 300.0f, kMinPictureShare = 0.2f;
+
+// The layout persisted between sessions in $XDG_CONFIG_HOME/inhand/gui.json (or
+// ~/.config/inhand/gui.json), never in a session: the panel's width and the picture's share.
+// A file that cannot be read as one is reported and left alone; the defaults are used.
+std::filesystem::path GuiLayoutPath() {
+  const char* xdg = std::getenv("XDG_CONFIG_HOME");
+  const char* home = std::getenv("HOME");
+  if (xdg && *xdg == '/') return std::filesystem::path(xdg) / "inhand/gui.json";
+  if (home && *home) return std::filesystem::path(home) / ".config/inhand/gui.json";
+  return {};
+}
+
+void LoadGuiLayout(GuiState& state) {
+  const std::filesystem::path path = GuiLayoutPath();
+  if (path.empty() || !std::filesystem::exists(path)) return;
+  try {
+    std::ifstream in(path);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    const float panel = j.at("panel_width").get<float>();
+    const float share = j.at("picture_share").get<float>();
+    if (!(panel >= kMinPanelWidth && panel <= 4000.0f) ||
+        !(share >= kMinPictureShare && share <= 1.0f))
+      throw std::runtime_error("panel_width in [220, 4000] and picture_share in [0.2, 1]");
+    state.panel_width = panel;
+    state.picture_share = share;
+  } catch (const std::exception& e) {
+    std::cerr << "inhand: " << path.string()
+              << ": not a layout (expected {\"panel_width\": PX, \"picture_share\": S}; "
+              << e.what() << "); the default layout is used\n";
+  }
+}
+
+// Written beside and renamed into place, so that a crash never leaves half a file.
+void SaveGuiLayout(const GuiState& state) {
+  const std::filesystem::path path = GuiLayoutPath();
+  if (!state.layout_changed || path.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(path.parent_path(), ec);
+  const std::filesystem::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << nlohmann::json{{"panel_width", state.panel_width},
+                          {"picture_share", state.picture_share}}
+               .dump(2)
+        << "\n";
+    if (!out) {
+      std::cerr << "inhand: " << path.string() << ": cannot save the layout\n";
+      return;
+    }
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) std::cerr << "inhand: " << path.string() << ": cannot save the layout\n";
+}
 
 class Runner {
  public:
@@ -258,16 +322,39 @@ void ApplyActions(Runner& runner, GuiState& state) {
   state.seek_sample = runner.sample();
 }
 
-constexpr float kPanelWidth = 330.0f;
+// The splitter between the panel and the views: a 8-px strip over their border; dragged, it
+// moves the border (the window's width bounds it).
+void DrawPanelSplitter(GuiState& state, int width, int height) {
+  state.panel_width =
+      std::clamp(state.panel_width, kMinPanelWidth,
+                 std::max(kMinPanelWidth, static_cast<float>(width) - kMinViewsWidth));
+  ImGui::SetNextWindowPos(ImVec2(state.panel_width - 4.0f, 0));
+  ImGui::SetNextWindowSize(ImVec2(8.0f, static_cast<float>(height)));
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
+  ImGui::Begin("panel splitter", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoBackground |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoMove);
+  ImGui::InvisibleButton("##split", ImVec2(8.0f, static_cast<float>(height)));
+  if (ImGui::IsItemHovered() || ImGui::IsItemActive())
+    ImGui::SetMouseCursor(ImGuiMouseCursor_ResizeEW);
+  if (ImGui::IsItemActive() && ImGui::GetIO().MouseDelta.x != 0.0f) {
+    state.panel_width =
+        std::clamp(state.panel_width + ImGui::GetIO().MouseDelta.x, kMinPanelWidth,
+                   std::max(kMinPanelWidth, static_cast<float>(width) - kMinViewsWidth));
+    state.layout_changed = true;
+  }
+  ImGui::End();
+  ImGui::PopStyleVar();
+}
 
 // The left panel: playback, overlay layers, filter parameters.
 void DrawControlPanel(Runner& runner, GuiState& state, int height) {
   const Session& s = runner.session();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
-  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(height)));
+  ImGui::SetNextWindowSize(ImVec2(state.panel_width, static_cast<float>(height)));
   ImGui::Begin("inhand", nullptr,
                ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse);
-  ImGui::PushItemWidth(kPanelWidth * 0.5f);  // leaves room for the longest label
+  ImGui::PushItemWidth(state.panel_width * 0.5f);  // leaves room for the longest label
   ImGui::TextWrapped("%s", s.info().name.c_str());
   ImGui::Text("t = %.3f s  sample %d/%d  frame %d", s.t(std::max(0, runner.sample())),
               runner.sample(), s.num_samples() - 1, runner.frame());
@@ -984,6 +1071,9 @@ void DrawHelp(GuiState& state, int width, int height) {
 //   key C                       type character C (`space` for a space)
 //   click X Y                   move to window pixel (X, Y), press the left button, release it
 //   scroll X Y N                move to (X, Y), turn the wheel N notches (positive: zoom in)
+//   drag X1 Y1 X2 Y2            press at (X1, Y1), move to (X2, Y2) holding it, release
+//   expect panel W TOL          the left panel is W px wide within TOL (its splitter)
+//   expect picture S TOL        the picture takes S of the views' width within TOL
 //   press KEY                   left, right, shift+left or shift+right
 //   screenshot FILE             save this frame as PNG
 //   expect time T TOL           the current time is T within TOL [s]
@@ -1019,6 +1109,8 @@ class GuiScript {
         if (!(words >> c.a >> c.b)) fail("click X Y (window pixels)");
       } else if (c.verb == "scroll") {
         if (!(words >> c.a >> c.b >> c.c)) fail("scroll X Y N (window pixels, notches)");
+      } else if (c.verb == "drag") {
+        if (!(words >> c.a >> c.b >> c.c >> c.d)) fail("drag X1 Y1 X2 Y2 (window pixels)");
       } else if (c.verb == "press") {
         if (!(words >> c.text) || (c.text != "left" && c.text != "right" &&
                                    c.text != "shift+left" && c.text != "shift+right"))
@@ -1034,6 +1126,12 @@ class GuiScript {
         } else if (what == "window") {
           c.verb = "expect-window";
           if (!(words >> c.a >> c.b >> c.c)) fail("expect window A B TOL");
+        } else if (what == "panel") {
+          c.verb = "expect-panel";
+          if (!(words >> c.a >> c.b)) fail("expect panel WIDTH TOL (pixels)");
+        } else if (what == "picture") {
+          c.verb = "expect-picture";
+          if (!(words >> c.a >> c.b)) fail("expect picture SHARE TOL");
         } else if (what == "events") {
           c.verb = "expect-events";
           if (!(words >> c.text >> c.a)) fail("expect events KIND MIN");
@@ -1042,10 +1140,10 @@ class GuiScript {
             known = known || c.text == EventKindName(static_cast<EventKind>(k));
           if (!known) fail("an event kind of FORMAT.md, or any");
         } else {
-          fail("expect time ..., expect window ... or expect events ...");
+          fail("expect time, window, panel, picture or events ...");
         }
       } else {
-        fail("wait, wait-events, seek, key, press, click, scroll, screenshot or expect");
+        fail("wait, wait-events, seek, key, press, click, scroll, drag, screenshot or expect");
       }
       script.commands_.push_back(c);
     }
@@ -1053,7 +1151,8 @@ class GuiScript {
   }
 
   bool done() const {
-    return next_ >= commands_.size() && !pressing_ && !releasing_ && wheel_ == 0.0f && key_ < 0;
+    return next_ >= commands_.size() && !pressing_ && !releasing_ && wheel_ == 0.0f && key_ < 0 &&
+           drag_.empty();
   }
   int failures() const { return failures_; }
 
@@ -1069,6 +1168,12 @@ class GuiScript {
     }
     if (wheel_ != 0.0f) {  // the frame after the move
       io.MouseWheel = std::exchange(wheel_, 0.0f);
+      return;
+    }
+    if (!drag_.empty()) {  // pressed where the drag starts, then one position a frame
+      io.MouseDown[0] = drag_.size() > 1;
+      mouse_ = io.MousePos = drag_.front();
+      drag_.pop_front();
       return;
     }
     if (pressing_) {  // the frame after the move: ImGui knows what is under the mouse
@@ -1111,6 +1216,18 @@ class GuiScript {
                    FormatDouble(c.a) + ", " + FormatDouble(c.b) + "] +- " + FormatDouble(c.c));
         continue;
       }
+      if (c.verb == "expect-panel") {
+        Report(where, std::abs(state.panel_width - c.a) <= c.b,
+               "panel " + FormatDouble(state.panel_width) + " px wide, expected " +
+                   FormatDouble(c.a) + " +- " + FormatDouble(c.b));
+        continue;
+      }
+      if (c.verb == "expect-picture") {
+        Report(where, std::abs(state.picture_share - c.a) <= c.b,
+               "picture " + FormatDouble(state.picture_share) + " of the views' width, expected " +
+                   FormatDouble(c.a) + " +- " + FormatDouble(c.b));
+        continue;
+      }
       if (c.verb == "expect-events") {
         long count = 0;
         for (const auto& set : state.overview.sets)
@@ -1142,6 +1259,16 @@ class GuiScript {
         mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
         io.MousePos = mouse_;
         wheel_ = static_cast<float>(c.c);
+      } else if (c.verb == "drag") {
+        // This frame the mouse moves to the start; the next it presses there, then it moves in
+        // eight steps to the end, holding the button, and releases it the frame after.
+        mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
+        io.MousePos = mouse_;
+        drag_.push_back(mouse_);
+        for (int i = 1; i <= 8; ++i)
+          drag_.push_back(ImVec2(static_cast<float>(c.a + (c.c - c.a) * i / 8.0),
+                                 static_cast<float>(c.b + (c.d - c.b) * i / 8.0)));
+        drag_.push_back(drag_.back());  // released at the end
       }
       return;  // one input per frame
     }
@@ -1153,7 +1280,7 @@ class GuiScript {
   struct Command {
     int line = 0;
     std::string verb, text;
-    double a = 0.0, b = 0.0, c = 0.0;
+    double a = 0.0, b = 0.0, c = 0.0, d = 0.0;
   };
   void Report(const std::string& where, bool ok, const std::string& what) {
     std::cout << where << (ok ? "ok: " : "FAILED: ") << what << "\n";
@@ -1165,7 +1292,8 @@ class GuiScript {
   int wait_ = 0;
   bool pressing_ = false, releasing_ = false;
   float wheel_ = 0.0f;
-  int key_ = -1;  // io.KeysDown index held for a frame
+  std::deque<ImVec2> drag_;  // the positions a drag still goes through, one a frame
+  int key_ = -1;             // io.KeysDown index held for a frame
   bool shift_ = false;
   ImVec2 mouse_{-1.0f, -1.0f};
   std::string screenshot_;
@@ -1175,9 +1303,9 @@ class GuiScript {
 // The right: the composed picture (orbit and zoom of its 3-D view by mouse) above the tabs.
 void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
   const SessionPlayer& p = runner.player();
-  ImGui::SetNextWindowPos(ImVec2(kPanelWidth, 0));
+  ImGui::SetNextWindowPos(ImVec2(state.panel_width, 0));
   ImGui::SetNextWindowSize(
-      ImVec2(static_cast<float>(width) - kPanelWidth, static_cast<float>(height)));
+      ImVec2(static_cast<float>(width) - state.panel_width, static_cast<float>(height)));
   ImGui::Begin("views", nullptr,
                ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse |
                    ImGuiWindowFlags_NoTitleBar);
@@ -1187,10 +1315,24 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
                          : shown.has_groundtruth()
                              ? "camera + estimates (truth dashed) | virtual view | 3-D view"
                              : "camera + estimates (no ground truth) | virtual view | 3-D view");
-  tex.picture.Show(avail);
-  if (ImGui::IsItemHovered()) {
+  tex.picture.Show(avail * state.picture_share);
+  const bool picture_hovered = ImGui::IsItemHovered();
+  const ImVec2 picture_min = ImGui::GetItemRectMin(), picture_max = ImGui::GetItemRectMax();
+  // The splitter under the picture: dragged, the picture grows or shrinks (aspect kept), the
+  // timeline and tabs below take the rest.
+  ImGui::InvisibleButton("##picture split", ImVec2(avail, 6.0f));
+  if (ImGui::IsItemHovered() || ImGui::IsItemActive())
+    ImGui::SetMouseCursor(ImGuiMouseCursor_ResizeNS);
+  if (ImGui::IsItemActive() && ImGui::GetIO().MouseDelta.y != 0.0f && tex.picture.height > 0) {
+    const float aspect =
+        static_cast<float>(tex.picture.width) / static_cast<float>(tex.picture.height);
+    state.picture_share = std::clamp(
+        state.picture_share + ImGui::GetIO().MouseDelta.y * aspect / avail, kMinPictureShare, 1.0f);
+    state.layout_changed = true;
+  }
+  if (picture_hovered) {
     const ImGuiIO& io = ImGui::GetIO();
-    const ImVec2 min = ImGui::GetItemRectMin(), max = ImGui::GetItemRectMax();
+    const ImVec2 min = picture_min, max = picture_max;
     const bool over_3d = io.MousePos.x > min.x + 2.0f * (max.x - min.x) / 3.0f;
     if (over_3d && ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
       state.orbit.azimuth -= 0.01 * io.MouseDelta.x;
@@ -1232,6 +1374,7 @@ void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int
   HandleKeys(runner, state);
   DrawControlPanel(runner, state, height);
   DrawViews(runner, state, tex, width, height);
+  DrawPanelSplitter(state, width, height);
   DrawHelp(state, width, height);
 }
 
@@ -1353,6 +1496,7 @@ int RunGui(const GuiCommand& cmd) {
     throw InputError("gui: the window must be at least 640x480");
   Session session = Session::Load(cmd.session);
   GuiState state;
+  LoadGuiLayout(state);
   if (!cmd.params.empty()) state.params = ReadTrackerParams(cmd.params);
   if (!cmd.modalities.empty()) state.sets = ParseModalities(cmd.modalities);
   if (cmd.time >= 0.0) {
@@ -1376,6 +1520,7 @@ int RunGui(const GuiCommand& cmd) {
     render.Run([&] { runner = std::make_unique<Runner>(session, state); });
     const int code = RunHeadless(cmd, render, *runner, state, script.get());
     render.Run([&] { runner.reset(); });
+    SaveGuiLayout(state);
     return code;
   }
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
@@ -1457,6 +1602,7 @@ int RunGui(const GuiCommand& cmd) {
             << " ms" << timings.Report();
   if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;
   std::cout << "\n";
+  SaveGuiLayout(state);
   return script && script->failures() > 0 ? 1 : 0;
 }
 

@@ -883,5 +883,51 @@ TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
       << malformed.output;
 }
 
+// The layout (issue 37): the splitter between the panel and the views and the one under the
+// picture move them when dragged; the layout is kept in the user's configuration folder (never
+// in the session) and the next session opens with it; a file that is not a layout is reported
+// by name and the defaults are used. Offscreen, 1280x800: the panel's border at x 330, the
+// picture's lower edge at y 235.
+TEST(Gui, SplittersMoveAndTheLayoutIsKeptInTheUsersConfiguration) {
+  INHAND_REQUIRE_GUI();
+  test::TempDir dir;
+  const std::string env = "env -u DISPLAY XDG_CONFIG_HOME=" + (dir / "config");
+  const std::string layout = dir / "config/inhand/gui.json";
+  std::ofstream(dir / "drag.script")
+      << "wait 3\nexpect panel 330 0.5\nexpect picture 1 1e-6\n"
+         "drag 330 400 430 400\nwait 2\nexpect panel 430 2\n"
+         "drag 900 237 900 177   # the picture's splitter, 60 px up\nwait 2\n"
+         "expect picture 0.72 0.04\nscreenshot "
+      << (dir / "dragged.png") << "\n";
+  const test::CommandResult dragged =
+      test::RunInhand("gui " + ShortSession() + " --script " + (dir / "drag.script"), env);
+  ASSERT_EQ(dragged.exit_code, 0) << dragged.output;
+  EXPECT_EQ(dragged.output.find("FAILED"), std::string::npos) << dragged.output;
+  ExpectInterface(ReadImage(dir / "dragged.png"));
+  const Json saved = Json::parse(test::ReadFile(layout));
+  EXPECT_NEAR(saved.at("panel_width").get<double>(), 430.0, 2.0);
+  const double share = saved.at("picture_share").get<double>();
+  EXPECT_NEAR(share, 0.72, 0.04);
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(ShortSession()))
+    EXPECT_NE(entry.path().filename(), "gui.json") << "the layout never goes into the session";
+  // The next session opens with it.
+  char again[256];
+  std::snprintf(again, sizeof again, "wait 3\nexpect panel %.3f 0.01\nexpect picture %.6f 1e-5\n",
+                saved.at("panel_width").get<double>(), share);
+  std::ofstream(dir / "again.script") << again;
+  const test::CommandResult reopened =
+      test::RunInhand("gui " + ShortSession() + " --script " + (dir / "again.script"), env);
+  EXPECT_EQ(reopened.exit_code, 0) << reopened.output;
+  EXPECT_EQ(reopened.output.find("FAILED"), std::string::npos) << reopened.output;
+  // A file that is not a layout: named, the defaults used, the file left as it was.
+  std::ofstream(layout) << "{\"panel_width\": \"wide\"}";
+  std::ofstream(dir / "default.script") << "wait 3\nexpect panel 330 0.5\nexpect picture 1 1e-6\n";
+  const test::CommandResult broken =
+      test::RunInhand("gui " + ShortSession() + " --script " + (dir / "default.script"), env);
+  EXPECT_EQ(broken.exit_code, 0) << broken.output;
+  EXPECT_NE(broken.output.find(layout + ": not a layout"), std::string::npos) << broken.output;
+  EXPECT_EQ(test::ReadFile(layout), "{\"panel_width\": \"wide\"}");
+}
+
 }  // namespace
 }  // namespace inhand

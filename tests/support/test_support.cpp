@@ -34,9 +34,26 @@ void TempDir::Write(const std::string& rel, const std::string& contents) const {
   std::ofstream(p, std::ios::binary) << contents;
 }
 
+namespace {
+
+// A configuration folder of this test process's own, empty: the GUI's saved layout of whoever runs
+// the tests never changes what they see. Removed when the process ends.
+struct ConfigHome {
+  std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("inhand-test-config-" + std::to_string(::getpid()));
+  ~ConfigHome() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
+}  // namespace
+
 CommandResult RunInhand(const std::string& args, const std::string& prefix) {
-  const std::string cmd =
-      (prefix.empty() ? "" : prefix + " ") + std::string(INHAND_BINARY) + " " + args + " 2>&1";
+  static const ConfigHome config;
+  const std::string cmd = "XDG_CONFIG_HOME='" + config.path.string() + "' " +
+                          (prefix.empty() ? "" : prefix + " ") + std::string(INHAND_BINARY) + " " +
+                          args + " 2>&1";
   CommandResult r;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (pipe == nullptr) return r;

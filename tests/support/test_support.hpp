@@ -61,7 +61,8 @@ struct CommandResult {
   std::string output;  // stdout and stderr together
 };
 // Runs the inhand binary with `args` (a shell-quoted string); `prefix` goes before the binary
-// (e.g. "env -u DISPLAY" or "xvfb-run -a").
+// (e.g. "env -u DISPLAY" or "xvfb-run -a"). XDG_CONFIG_HOME is an empty folder of the test
+// process (a prefix "env XDG_CONFIG_HOME=DIR" gives another).
 CommandResult RunInhand(const std::string& args, const std::string& prefix = "");
 inline std::string InhandBinary() { return INHAND_BINARY; }
 
