@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -19,18 +21,6 @@ using Json = nlohmann::json;
 const Json kTime = {
     {"type", "object"},
     {"properties", {{"sec", {{"type", "integer"}}}, {"nsec", {{"type", "integer"}}}}}};
-const Json kVector3 = {
-    {"type", "object"},
-    {"properties",
-     {{"x", {{"type", "number"}}}, {"y", {{"type", "number"}}}, {"z", {{"type", "number"}}}}}};
-const Json kQuaternion = {{"type", "object"},
-                          {"properties",
-                           {{"x", {{"type", "number"}}},
-                            {"y", {{"type", "number"}}},
-                            {"z", {{"type", "number"}}},
-                            {"w", {{"type", "number"}}}}}};
-const Json kPose = {{"type", "object"},
-                    {"properties", {{"position", kVector3}, {"orientation", kQuaternion}}}};
 const Json kColor = {{"type", "object"},
                      {"properties",
                       {{"r", {{"type", "number"}}},
@@ -61,26 +51,75 @@ Json ColorJson(const Rgb& c, double a = 1.0) {
   return {{"r", c.r / 255.0}, {"g", c.g / 255.0}, {"b", c.b / 255.0}, {"a", a}};
 }
 
-std::string Base64(const std::string& bytes) {
-  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  std::size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16 |
-                       static_cast<unsigned char>(bytes[i + 1]) << 8 |
-                       static_cast<unsigned char>(bytes[i + 2]);
-    out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
+// ROS 2's serialization (XCDR1, little endian): the encapsulation header 00 01 00 00, then each
+// primitive aligned to its size, counted from the end of that header; strings with their length
+// (the NUL included) and a NUL, sequences with their count. The host is little endian (x86-64,
+// arm64).
+class Cdr {
+ public:
+  Cdr() : bytes_("\x00\x01\x00\x00", 4) {}
+  template <class T>
+  Cdr& Put(T v) {
+    Align(sizeof(T));
+    char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    bytes_.append(b, sizeof(T));
+    return *this;
   }
-  if (i + 1 == bytes.size()) {
-    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
-    out += {k[v >> 18], k[(v >> 12) & 63], '=', '='};
-  } else if (i + 2 == bytes.size()) {
-    const unsigned v =
-        static_cast<unsigned char>(bytes[i]) << 16 | static_cast<unsigned char>(bytes[i + 1]) << 8;
-    out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], '='};
+  Cdr& String(const std::string& s) {
+    Put<std::uint32_t>(static_cast<std::uint32_t>(s.size() + 1));
+    bytes_ += s;
+    bytes_.push_back('\0');
+    return *this;
   }
-  return out;
+  Cdr& Bytes(const std::string& b) {  // uint8[]
+    Put<std::uint32_t>(static_cast<std::uint32_t>(b.size()));
+    bytes_ += b;
+    return *this;
+  }
+  Cdr& Time(double t) {  // builtin_interfaces/Time
+    const long long ns = std::max<long long>(0, std::llround(t * 1e9));
+    return Put<std::int32_t>(static_cast<std::int32_t>(ns / 1000000000))
+        .Put<std::uint32_t>(static_cast<std::uint32_t>(ns % 1000000000));
+  }
+  Cdr& Pose(const Transform& T) {  // translation (x y z), then the quaternion (x y z w)
+    const Quat q(T.linear());
+    const Vec3& p = T.translation();
+    for (const double v : {p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w()}) Put<double>(v);
+    return *this;
+  }
+  const std::string& bytes() const { return bytes_; }
+
+ private:
+  void Align(std::size_t n) { bytes_.append((n - (bytes_.size() - 4) % n) % n, '\0'); }
+  std::string bytes_;
+};
+
+// ros2msg definitions of the foxglove messages written as CDR: the message's fields, then each
+// type it uses after a separator line, as ROS 2 tools concatenate them.
+const std::string kSeparator = "\n" + std::string(80, '=') + "\n";
+const std::string kTimeMsg = "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec";
+const std::string kQuaternionMsg =
+    "MSG: geometry_msgs/Quaternion\nfloat64 x\nfloat64 y\nfloat64 z\nfloat64 w";
+const std::string kPoseInFrameMsg =
+    "builtin_interfaces/Time timestamp\nstring frame_id\ngeometry_msgs/Pose pose" + kSeparator +
+    kTimeMsg + kSeparator +
+    "MSG: geometry_msgs/Pose\ngeometry_msgs/Point position\ngeometry_msgs/Quaternion "
+    "orientation" +
+    kSeparator + "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z" + kSeparator +
+    kQuaternionMsg;
+const std::string kFrameTransformMsg =
+    "builtin_interfaces/Time timestamp\nstring parent_frame_id\nstring child_frame_id\n"
+    "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation" +
+    kSeparator + kTimeMsg + kSeparator +
+    "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z" + kSeparator + kQuaternionMsg;
+const std::string kCompressedImageMsg =
+    "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\nstring format" + kSeparator +
+    kTimeMsg;
+
+std::string FrameTransformCdr(double t, const std::string& parent, const std::string& child,
+                              const Transform& T) {
+  return Cdr().Time(t).String(parent).String(child).Pose(T).bytes();
 }
 
 std::uint64_t LogTime(double t) {
@@ -95,29 +134,20 @@ McapExport::McapExport(const std::string& path, const SessionPlayer& player)
     return w_->AddSchema(name, "jsonschema", Schema(name, properties).dump());
   };
   const std::uint16_t pose =
-      schema("foxglove.PoseInFrame",
-             {{"timestamp", kTime}, {"frame_id", {{"type", "string"}}}, {"pose", kPose}});
+      w_->AddSchema("foxglove_msgs/msg/PoseInFrame", "ros2msg", kPoseInFrameMsg);
   for (const ModalitySet& s : p_.sets())
-    pose_channels_.push_back(w_->AddChannel("/inhand/pose/" + s.name, pose, "json"));
-  tf_ = w_->AddChannel("/tf",
-                       schema("foxglove.FrameTransform", {{"timestamp", kTime},
-                                                          {"parent_frame_id", {{"type", "string"}}},
-                                                          {"child_frame_id", {{"type", "string"}}},
-                                                          {"translation", kVector3},
-                                                          {"rotation", kQuaternion}}),
-                       "json");
+    pose_channels_.push_back(w_->AddChannel("/inhand/pose/" + s.name, pose, "cdr"));
+  tf_ = w_->AddChannel(
+      "/tf", w_->AddSchema("foxglove_msgs/msg/FrameTransform", "ros2msg", kFrameTransformMsg),
+      "cdr");
   errors_ = w_->AddChannel(
       "/inhand/errors",
       schema("inhand.Errors", {{"t", {{"type", "number"}}}, {"sets", {{"type", "object"}}}}),
       "json");
   if (p_.session().info().camera) {
-    image_ = w_->AddChannel("/camera/image",
-                            schema("foxglove.CompressedImage",
-                                   {{"timestamp", kTime},
-                                    {"frame_id", {{"type", "string"}}},
-                                    {"data", {{"type", "string"}, {"contentEncoding", "base64"}}},
-                                    {"format", {{"type", "string"}}}}),
-                            "json");
+    image_ = w_->AddChannel(
+        "/camera/image",
+        w_->AddSchema("foxglove_msgs/msg/CompressedImage", "ros2msg", kCompressedImageMsg), "cdr");
     annotations_ =
         w_->AddChannel("/camera/annotations",
                        schema("foxglove.ImageAnnotations", {{"circles", {{"type", "array"}}},
@@ -155,16 +185,8 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const EstimateRecord& r = records[i];
     const std::string& name = p_.sets()[i].name;
-    const Json pose = PoseJson(r.T_PO);
-    w_->Write(pose_channels_[i], log,
-              Json{{"timestamp", Time(t)}, {"frame_id", "palm"}, {"pose", pose}}.dump());
-    w_->Write(tf_, log,
-              Json{{"timestamp", Time(t)},
-                   {"parent_frame_id", "palm"},
-                   {"child_frame_id", "object_" + name},
-                   {"translation", pose["position"]},
-                   {"rotation", pose["orientation"]}}
-                  .dump());
+    w_->Write(pose_channels_[i], log, Cdr().Time(t).String("palm").Pose(r.T_PO).bytes());
+    w_->Write(tf_, log, FrameTransformCdr(t, "palm", "object_" + name, r.T_PO));
     Json e = {
         {"sigma_position_mm",
          {r.sigma_position.x() * 1000, r.sigma_position.y() * 1000, r.sigma_position.z() * 1000}},
@@ -193,16 +215,8 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
     AddEvents(i, r.events, t);
   }
   w_->Write(errors_, log, errors.dump());
-  if (s.has_groundtruth()) {
-    const Json pose = PoseJson(s.GroundTruthAt(t));
-    w_->Write(tf_, log,
-              Json{{"timestamp", Time(t)},
-                   {"parent_frame_id", "palm"},
-                   {"child_frame_id", "object_truth"},
-                   {"translation", pose["position"]},
-                   {"rotation", pose["orientation"]}}
-                  .dump());
-  }
+  if (s.has_groundtruth())
+    w_->Write(tf_, log, FrameTransformCdr(t, "palm", "object_truth", s.GroundTruthAt(t)));
   if (frame >= 0 && s.info().camera) AddFrame(frame, t);
 }
 
@@ -237,24 +251,19 @@ void McapExport::AddFrame(int frame, double t) {
   const Session& s = p_.session();
   const CameraFrame& f = s.camera_frames()[static_cast<std::size_t>(frame)];
   const std::uint64_t log = LogTime(f.t);
-  const Json camera_pose = PoseJson(f.T_PC);
-  w_->Write(tf_, log,
-            Json{{"timestamp", Time(f.t)},
-                 {"parent_frame_id", "palm"},
-                 {"child_frame_id", "camera"},
-                 {"translation", camera_pose["position"]},
-                 {"rotation", camera_pose["orientation"]}}
-                .dump());
+  w_->Write(tf_, log, FrameTransformCdr(f.t, "palm", "camera", f.T_PC));
+  // The session's image file as it is (PNG or JPEG), never decoded or re-encoded.
   std::ifstream in(s.Resolve(f.image), std::ios::binary);
   std::stringstream bytes;
   bytes << in.rdbuf();
   const std::string ext = f.image.substr(f.image.rfind('.') + 1);
   w_->Write(image_, log,
-            Json{{"timestamp", Time(f.t)},
-                 {"frame_id", "camera"},
-                 {"data", Base64(bytes.str())},
-                 {"format", ext == "jpg" ? "jpeg" : ext}}
-                .dump());
+            Cdr()
+                .Time(f.t)
+                .String("camera")
+                .Bytes(bytes.str())
+                .String(ext == "jpg" ? "jpeg" : ext)
+                .bytes());
 
   // The overlays in image coordinates: each set's object origin and contact points, its
   // features (measured -> predicted), projected through the camera.

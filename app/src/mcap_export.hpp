@@ -1,12 +1,14 @@
 #pragma once
-// replay --mcap: the replay as an MCAP file for Foxglove and Lichtblick. JSON messages with their
-// JSON schemas (no protobuf): each set's pose (foxglove.PoseInFrame on /inhand/pose/SET and a
-// foxglove.FrameTransform palm -> object_SET on /tf) and its errors and sigmas (plain JSON on
-// /inhand/errors) at joint rate; at each camera frame the image (foxglove.CompressedImage), its
-// Fig.-1 overlays as foxglove.ImageAnnotations, and the contacts and forces as a
-// foxglove.SceneUpdate. Each set's events (tracker/events.hpp) as foxglove.Log on /inhand/events
-// (name "inhand/SET"; the event's own fields beside the log's), logged at the sample that reported
-// them. The file is chunked, zstd-compressed and indexed (ros/mcap_writer.hpp).
+// replay --mcap: the replay as an MCAP file for Foxglove and Lichtblick. Each set's pose
+// (foxglove_msgs/msg/PoseInFrame on /inhand/pose/SET), the transforms palm -> object_SET,
+// object_truth and camera (foxglove_msgs/msg/FrameTransform on /tf) and the camera images
+// (foxglove_msgs/msg/CompressedImage: the session's PNG or JPEG bytes as they are) are ros2msg
+// schemas with CDR messages, which both viewers decode natively; each set's errors and sigmas
+// (/inhand/errors, at joint rate), the Fig.-1 overlays (foxglove.ImageAnnotations), the contacts
+// and forces (foxglove.SceneUpdate) and the events (foxglove.Log on /inhand/events, name
+// "inhand/SET", the event's own fields beside the log's, logged at the sample that reported them)
+// are still JSON with JSON schemas. The file is chunked, zstd-compressed and indexed
+// (ros/mcap_writer.hpp).
 #include <memory>
 #include <string>
 

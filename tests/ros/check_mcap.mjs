@@ -1,13 +1,18 @@
 // Reads an MCAP file with the official reader (@mcap/core's McapStreamReader, CRCs validated,
 // zstd and lz4 chunks decompressed by Foxglove's wasm codecs) and prints what it holds as JSON:
-// per topic its schema, encodings and message count; the time span; and whether every JSON
-// message parses. Exit 1 when the reader rejects the file.
+// per topic its schema, encodings and message count; the time span; whether every JSON message
+// parses; and every CDR message decoded by the official deserializer
+// (@foxglove/rosmsg2-serialization over the file's ros2msg schema, parsed by @foxglove/rosmsg):
+// the failures counted, each topic's first message kept (image data as its length and first
+// bytes). Exit 1 when the reader rejects the file.
 //   node check_mcap.mjs FILE
 import { readFileSync } from "node:fs";
 import { createRequire } from "node:module";
 
 const require = createRequire(import.meta.url);
 const { McapStreamReader } = require("./node/node_modules/@mcap/core");
+const { MessageReader } = require("./node/node_modules/@foxglove/rosmsg2-serialization");
+const { parse } = require("./node/node_modules/@foxglove/rosmsg");
 const zstd = require("./node/node_modules/@foxglove/wasm-zstd");
 const lz4 = require("./node/node_modules/@foxglove/wasm-lz4");
 
@@ -20,7 +25,8 @@ const reader = new McapStreamReader({
 try {
   reader.append(new Uint8Array(readFileSync(process.argv[2])));
   const schemas = new Map(), channels = new Map(), topics = {};
-  let start = null, end = null, jsonErrors = 0, statistics = null, footer = false;
+  let start = null, end = null, jsonErrors = 0, cdrErrors = 0, statistics = null, footer = false;
+  const readers = new Map(), first = {};
   for (let r; (r = reader.nextRecord()); ) {
     if (r.type === "Schema") schemas.set(r.id, r);
     else if (r.type === "Channel") {
@@ -34,12 +40,26 @@ try {
       end = end === null || r.logTime > end ? r.logTime : end;
       if (c.messageEncoding === "json") {
         try { JSON.parse(new TextDecoder().decode(r.data)); } catch { jsonErrors += 1; }
+      } else if (c.messageEncoding === "cdr") {
+        try {
+          if (!readers.has(c.schemaId)) {
+            const s = schemas.get(c.schemaId);
+            if (s.encoding !== "ros2msg") throw new Error(`schema encoding ${s.encoding}`);
+            readers.set(c.schemaId, new MessageReader(parse(new TextDecoder().decode(s.data), { ros2: true })));
+          }
+          const m = readers.get(c.schemaId).readMessage(r.data);
+          if (!(c.topic in first)) {
+            if (m.data instanceof Uint8Array) m.data = { length: m.data.length, head: Array.from(m.data.slice(0, 8)) };
+            first[c.topic] = m;
+          }
+        } catch (e) { cdrErrors += 1; }
       }
     } else if (r.type === "Statistics") statistics = { messages: Number(r.messageCount), channels: r.channelCount };
     else if (r.type === "Footer") footer = true;
   }
   if (!reader.done()) throw new Error(`${reader.bytesRemaining()} bytes left unread`);
-  console.log(JSON.stringify({ topics, start_ns: String(start), end_ns: String(end), json_errors: jsonErrors, statistics, footer }));
+  console.log(JSON.stringify({ topics, start_ns: String(start), end_ns: String(end), json_errors: jsonErrors,
+    cdr_errors: cdrErrors, first, statistics, footer }, (k, v) => (typeof v === "bigint" ? String(v) : v)));
 } catch (e) {
   console.error(`check_mcap: ${process.argv[2]}: ${e.message}`);
   process.exit(1);

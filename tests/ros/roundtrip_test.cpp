@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -152,10 +153,41 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   EXPECT_EQ(count("/camera/image"), frames);
   EXPECT_EQ(count("/camera/annotations"), frames);
   EXPECT_EQ(count("/inhand/contacts"), frames);
-  EXPECT_EQ(j.at("topics").at("/inhand/pose/j").at("schema"), "foxglove.PoseInFrame");
-  EXPECT_EQ(j.at("topics").at("/camera/image").at("schema"), "foxglove.CompressedImage");
+  EXPECT_EQ(j.at("topics").at("/inhand/pose/j").at("schema"), "foxglove_msgs/msg/PoseInFrame");
+  EXPECT_EQ(j.at("topics").at("/camera/image").at("schema"), "foxglove_msgs/msg/CompressedImage");
+  EXPECT_EQ(j.at("topics").at("/tf").at("schema"), "foxglove_msgs/msg/FrameTransform");
   EXPECT_EQ(j.at("topics").at("/inhand/contacts").at("schema"), "foxglove.SceneUpdate");
-  EXPECT_EQ(j.at("topics").at("/tf").at("message_encoding"), "json");
+  for (const char* topic : {"/tf", "/camera/image", "/inhand/pose/jta"}) {
+    EXPECT_EQ(j.at("topics").at(topic).at("message_encoding"), "cdr") << topic;
+    EXPECT_EQ(j.at("topics").at(topic).at("schema_encoding"), "ros2msg") << topic;
+  }
+  // Every CDR message decoded by @foxglove/rosmsg2-serialization; the first image is the
+  // session's PNG byte for byte in length and signature, stamped at its capture time; the first
+  // pose is estimates.csv's first row.
+  EXPECT_EQ(j.at("cdr_errors"), 0);
+  const nlohmann::json& image = j.at("first").at("/camera/image");
+  const std::string png = test::ReadFile(s.Resolve(s.camera_frames()[0].image));
+  EXPECT_EQ(image.at("data").at("length").get<std::size_t>(), png.size());
+  EXPECT_EQ(image.at("data").at("head"), nlohmann::json::array({137, 80, 78, 71, 13, 10, 26, 10}));
+  EXPECT_EQ(image.at("format"), "png");
+  EXPECT_EQ(image.at("frame_id"), "camera");
+  const long long frame_ns = std::llround(s.camera_frames()[0].t * 1e9);
+  EXPECT_EQ(image.at("timestamp").at("sec").get<long long>(), frame_ns / 1000000000);
+  EXPECT_EQ(image.at("timestamp").at("nanosec").get<long long>(), frame_ns % 1000000000);
+  std::istringstream estimates(test::ReadFile(dir / "r/estimates.csv"));
+  std::string header, row;
+  std::getline(estimates, header);
+  std::getline(estimates, row);  // t, set (j first), px, py, pz, ...
+  std::vector<double> values;
+  std::istringstream cells(row);
+  for (std::string cell; std::getline(cells, cell, ',');)
+    values.push_back(cell == "j" ? 0.0 : std::strtod(cell.c_str(), nullptr));
+  ASSERT_GE(values.size(), 5u);
+  const nlohmann::json& pose = j.at("first").at("/inhand/pose/j");
+  EXPECT_EQ(pose.at("frame_id"), "palm");
+  EXPECT_NEAR(pose.at("pose").at("position").at("x").get<double>(), values[2], 1e-15);
+  EXPECT_NEAR(pose.at("pose").at("position").at("y").get<double>(), values[3], 1e-15);
+  EXPECT_NEAR(pose.at("pose").at("position").at("z").get<double>(), values[4], 1e-15);
   EXPECT_EQ(j.at("start_ns"), std::to_string(std::llround(s.t(0) * 1e9)));
   EXPECT_EQ(j.at("end_ns"), std::to_string(std::llround(s.t(static_cast<int>(n) - 1) * 1e9)));
   EXPECT_EQ(j.at("json_errors"), 0);

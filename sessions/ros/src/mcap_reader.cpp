@@ -10,22 +10,14 @@
 #include "cdr.hpp"
 #include "inhand/core/error.hpp"
 #include "mapped_file.hpp"
+#include "mcap_format.hpp"
 #include "recordings.hpp"
 
 namespace inhand::ros {
 
 namespace {
 
-constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-enum Op : std::uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kDataEnd = 0x0F
-};
+using namespace mcap;  // NOLINT: the format's opcodes
 
 // Bounds-checked little-endian reads inside one record.
 class Cursor {

@@ -6,25 +6,13 @@
 #include <algorithm>
 
 #include "inhand/core/error.hpp"
+#include "mcap_format.hpp"
 
 namespace inhand::ros {
 
 namespace {
 
-constexpr char kMagic[8] = {'\x89', 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-enum Op : std::uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kMessageIndex = 0x07,
-  kChunkIndex = 0x08,
-  kStatistics = 0x0B,
-  kSummaryOffset = 0x0E,
-  kDataEnd = 0x0F,
-};
+using namespace mcap;  // NOLINT: the format's opcodes
 
 template <class T>
 void Int(std::string* s, T v) {
