@@ -77,10 +77,11 @@ class Cdr {
     bytes_ += b;
     return *this;
   }
-  Cdr& Time(double t) {  // builtin_interfaces/Time
-    const long long ns = std::max<long long>(0, std::llround(t * 1e9));
-    return Put<std::int32_t>(static_cast<std::int32_t>(ns / 1000000000))
-        .Put<std::uint32_t>(static_cast<std::uint32_t>(ns % 1000000000));
+  Cdr& Time(double t) {  // builtin_interfaces/Time: sec may be negative, nanosec in [0, 1e9)
+    const long long ns = std::llround(t * 1e9);
+    const long long sec = ns >= 0 ? ns / 1000000000 : -((-ns + 999999999) / 1000000000);
+    return Put<std::int32_t>(static_cast<std::int32_t>(sec))
+        .Put<std::uint32_t>(static_cast<std::uint32_t>(ns - sec * 1000000000));
   }
   Cdr& Pose(const Transform& T) {  // translation (x y z), then the quaternion (x y z w)
     const Quat q(T.linear());
