@@ -22,6 +22,7 @@
 #include "inhand/core/error.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
+#include "inhand/sessions/install_dirs.hpp"
 #include "inhand/sessions/session.hpp"
 #include "inhand/tracker/tracker.hpp"
 
@@ -200,9 +201,7 @@ std::string InhandBinary(const std::string& given) {
     if (!fs::is_regular_file(given)) throw InputError("inhand_binary: " + given + ": no such file");
     return fs::absolute(given).string();
   }
-  const fs::path here =
-      fs::path(py::module_::import("inhand").attr("__file__").cast<std::string>()).parent_path();
-  for (const fs::path& p : {here / "../bin/inhand", here / "../../../bin/inhand"})
+  for (const fs::path& p : BesideRunningCode("bin/inhand"))
     if (fs::is_regular_file(p)) return fs::canonical(p).string();
   const py::object which = py::module_::import("shutil").attr("which")("inhand");
   if (!which.is_none()) return which.cast<std::string>();

@@ -19,4 +19,11 @@ std::filesystem::path RunningCodeDir() {
   return ec ? std::filesystem::path() : file.parent_path();
 }
 
+std::vector<std::filesystem::path> BesideRunningCode(const std::filesystem::path& relative) {
+  const std::filesystem::path here = RunningCodeDir();
+  if (here.empty()) return {};
+  return {(here / ".." / relative).lexically_normal(),
+          (here / "../../.." / relative).lexically_normal()};
+}
+
 }  // namespace inhand

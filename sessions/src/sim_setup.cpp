@@ -75,13 +75,9 @@ std::string AssetDir() {
   if (const char* env = std::getenv("INHAND_ASSETS"); env && *env) return env;
   // Installed: the code is PREFIX/bin/inhand or the Python module in PREFIX/lib/python3.X/
   // dist-packages; the assets are in PREFIX/share/inhand/assets.
-  std::vector<fs::path> tried;
-  if (const fs::path here = RunningCodeDir(); !here.empty())
-    for (const char* up : {"..", "../../.."}) {
-      const fs::path dir = (here / up / "share/inhand/assets").lexically_normal();
-      if (fs::is_directory(dir / "hands")) return dir.string();
-      tried.push_back(dir);
-    }
+  const std::vector<fs::path> tried = BesideRunningCode("share/inhand/assets");
+  for (const fs::path& dir : tried)
+    if (fs::is_directory(dir / "hands")) return dir.string();
   // The build tree: the source tree's assets.
   if (fs::is_directory(fs::path(INHAND_ASSET_DIR) / "hands")) return INHAND_ASSET_DIR;
   std::string message = "the project's assets (hands/, objects/) are not in";
