@@ -12,7 +12,7 @@ namespace inhand::app {
 
 namespace {
 
-cv::Mat Rgb(const Image8& im) {
+cv::Mat RgbMat(const Image8& im) {
   const cv::Mat m(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3,
                   const_cast<std::uint8_t*>(im.data.data()));
   cv::Mat out;
@@ -65,8 +65,8 @@ MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs
   const MatchDebug& d = r.debug;
   MatchPictures out;
   if (camera_image.empty() || fs.virtual_view.colour.empty()) return out;
-  cv::Mat camera = Rgb(camera_image), virt = Rgb(fs.virtual_view.colour);
-  cv::Mat real_edges = Rgb(d.real_edges), virtual_edges = Rgb(d.virtual_edges);
+  cv::Mat camera = RgbMat(camera_image), virt = RgbMat(fs.virtual_view.colour);
+  cv::Mat real_edges = RgbMat(d.real_edges), virtual_edges = RgbMat(d.virtual_edges);
   cv::Mat corners_real = camera.clone(), corners_virtual = virt.clone();
   for (const Vec2& c : d.real_corners)
     cv::circle(corners_real, P(c), 4, cv::Scalar(255, 230, 0), 1, cv::LINE_AA);
@@ -97,7 +97,7 @@ MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs
   for (int i = 0; i < n; ++i) {
     if (d.votes[static_cast<std::size_t>(i)].empty()) continue;
     cv::Mat heat;
-    cv::applyColorMap(Rgb(d.votes[static_cast<std::size_t>(i)]), heat, cv::COLORMAP_INFERNO);
+    cv::applyColorMap(RgbMat(d.votes[static_cast<std::size_t>(i)]), heat, cv::COLORMAP_INFERNO);
     cv::resize(heat, heat, cv::Size(tile - 4, tile - 4), 0, 0, cv::INTER_NEAREST);
     heat.copyTo(
         votes(cv::Rect((i % per_row) * tile + 2, (i / per_row) * tile + 2, tile - 4, tile - 4)));

@@ -5,14 +5,13 @@
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
+#include "cv_colour.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/renderer/views.hpp"
 
 namespace inhand {
 
 namespace {
-
-cv::Scalar Colour(const Rgb& c) { return cv::Scalar(c.r, c.g, c.b); }  // the Mat holds RGB
 
 // Projects a palm-frame point; false when behind the camera.
 bool ProjectP(const Transform& T_CP, const Intrinsics& K, const Vec3& X_P, Vec2& uv) {

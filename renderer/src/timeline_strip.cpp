@@ -5,6 +5,7 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 
+#include "cv_colour.hpp"
 #include "inhand/core/error.hpp"
 
 namespace inhand {
@@ -20,8 +21,6 @@ constexpr double kFont = 0.4;
 const cv::Scalar kBackground(22, 22, 28);
 const cv::Scalar kGrid(70, 70, 80);
 const cv::Scalar kText(170, 170, 180);
-
-cv::Scalar Colour(const Rgb& c) { return cv::Scalar(c.r, c.g, c.b); }  // the Mat holds RGB
 
 cv::Mat View(Image8& im) { return cv::Mat(im.height, im.width, CV_8UC3, im.data.data()); }
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "bench_paths.hpp"
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/filter/filter.hpp"
 #include "inhand/io/object_loader.hpp"
@@ -14,7 +15,7 @@
 namespace inhand {
 namespace {
 
-struct Scene {
+struct FilterScene {
   HandModel hand;
   ObjectModel object;
   std::unique_ptr<BulletContactQuery> query;
@@ -25,8 +26,9 @@ struct Scene {
 
 // A grasp-like state: joints 60 % of the way into their range from the middle, and the object
 // moved from far above the palm towards it until at least three links are within 1 mm.
-Scene MakeScene(const std::string& urdf, const std::string& object_file, const Mat3& R_PO) {
-  Scene s;
+FilterScene MakeFilterScene(const std::string& urdf, const std::string& object_file,
+                            const Mat3& R_PO) {
+  FilterScene s;
   HandLoadOptions options;
   options.load_visual_meshes = false;
   s.hand = LoadHandModel(urdf, options);
@@ -69,7 +71,7 @@ void StepBenchmark(benchmark::State& state, const std::string& urdf, const std::
     state.SkipWithError(("absent: " + urdf).c_str());
     return;
   }
-  Scene s = MakeScene(urdf, object, R);
+  FilterScene s = MakeFilterScene(urdf, object, R);
   FilterParams params;
   Filter filter(s.hand, *s.query, params, FilterOptions{true});
   filter.Reset(s.T_PO, s.q, StartSigmas{0.02, 0.087, 0.087, {}});
@@ -89,7 +91,6 @@ void StepBenchmark(benchmark::State& state, const std::string& urdf, const std::
       benchmark::Counter(static_cast<double>(constraints) / std::max(k, 1L));
 }
 
-const std::string kRoot = INHAND_SOURCE_DIR;
 const std::string kHand = kRoot + "/assets/hands/inhand_hand/inhand_hand.urdf";
 const std::string kShared = kRoot + "/../shared/assets";
 const Mat3 kAcross = ExpSO3(Vec3(0, M_PI / 2, 0));  // a bottle lying across the palm

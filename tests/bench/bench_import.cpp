@@ -14,14 +14,14 @@
 #include <filesystem>
 #include <random>
 
+#include "bench_paths.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/ros/import.hpp"
 #include "inhand/sessions/image_io.hpp"
 
 namespace {
 
-const std::string kRoot = INHAND_SOURCE_DIR;
-const std::string kHand = kRoot + "/assets/hands/inhand_hand/inhand_hand.urdf";
+const std::string kHand = inhand::kRoot + "/assets/hands/inhand_hand/inhand_hand.urdf";
 constexpr double kSeconds = 10.0;
 
 // A camera-like picture: smooth shading, edges, sensor noise (PNG cannot squeeze it to nothing).
@@ -109,7 +109,7 @@ void BM_Import_Ros1Bag_10s_500HzJoints_30Hz640x480(benchmark::State& state) {
   o.out = out;
   o.overwrite = true;
   o.hand_urdf = kHand;
-  o.object = kRoot + "/assets/objects/ketchup_bottle/object.json";
+  o.object = inhand::kRoot + "/assets/objects/ketchup_bottle/object.json";
   o.effort_is_external = true;
   o.initial_pose = inhand::Transform::Identity();
   std::uint64_t frames = 0;

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "bench_paths.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
@@ -13,8 +14,6 @@
 
 namespace inhand {
 namespace {
-
-const std::string kRoot = INHAND_SOURCE_DIR;
 
 struct RenderScene {
   Renderer renderer;
