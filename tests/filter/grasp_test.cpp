@@ -141,7 +141,7 @@ Grasp BestGrasp(const HandModel& hand, BulletContactQuery& query, const Aabb& ob
   return best;
 }
 
-Vec6 PoseError(const Transform& T_est, const Transform& T_true) {
+Vec6 BodyPoseError(const Transform& T_est, const Transform& T_true) {
   Vec6 e;
   e.head<3>() = T_est.translation() - T_true.translation();
   e.tail<3>() = LogSO3(T_true.linear().transpose() * T_est.linear());
@@ -149,7 +149,7 @@ Vec6 PoseError(const Transform& T_est, const Transform& T_true) {
 }
 
 double Nees(const Filter& f, const Transform& T_true) {
-  const Vec6 e = PoseError(f.T_PO(), T_true);
+  const Vec6 e = BodyPoseError(f.T_PO(), T_true);
   const Eigen::Matrix<double, 6, 6> P = f.covariance().topLeftCorner<6, 6>();
   return e.dot(P.ldlt().solve(e));
 }
@@ -205,7 +205,7 @@ TEST(Grasp, ContradictoryContactsSettleAndStayConsistent) {
       if (k % 1000 == 0) {
         double deepest = 0.0;
         for (const auto& c : filter.trace().contacts) deepest = std::min(deepest, c.distance);
-        const Vec6 e = PoseError(filter.T_PO(), g.T_PO);
+        const Vec6 e = BodyPoseError(filter.T_PO(), g.T_PO);
         std::printf("%4.1f | %5.2f | %5.2f | %5.2f | %6.2f | %5.2f\n", k * 1e-3,
                     e.head<3>().norm() * 1e3, e.tail<3>().norm() * 180 / M_PI,
                     std::sqrt(filter.covariance().topLeftCorner<3, 3>().trace() / 3) * 1e3, nees,
@@ -215,9 +215,9 @@ TEST(Grasp, ContradictoryContactsSettleAndStayConsistent) {
     if (k == 5000) at_5s = filter.T_PO();
   }
   // The thicker fingers did push the estimate away from the truth (the test is not vacuous).
-  EXPECT_GT(PoseError(filter.T_PO(), g.T_PO).head<3>().norm(), 2e-3);
+  EXPECT_GT(BodyPoseError(filter.T_PO(), g.T_PO).head<3>().norm(), 2e-3);
   // Settled: over the last 5 s it moves less than 1 mm and 1 deg.
-  const Vec6 moved = PoseError(filter.T_PO(), at_5s);
+  const Vec6 moved = BodyPoseError(filter.T_PO(), at_5s);
   EXPECT_LT(moved.head<3>().norm(), 1e-3);
   EXPECT_LT(moved.tail<3>().norm(), 1.0 * M_PI / 180);
   // NEES of the 6-D pose error: every 0.1 s below chi2_6 at 99.9 % (22.46), the mean below the
@@ -258,7 +258,7 @@ TEST(Grasp, AllegroStaticGraspsAroundYcbScans) {
         filter.Predict(g.q, 0.001);
         filter.UpdateContacts(tau);
       }
-      const Vec6 e0 = PoseError(start, g.T_PO), e1 = PoseError(filter.T_PO(), g.T_PO);
+      const Vec6 e0 = BodyPoseError(start, g.T_PO), e1 = BodyPoseError(filter.T_PO(), g.T_PO);
       const double p0 = e0.head<3>().norm(), p1 = e1.head<3>().norm();
       const double r0 = e0.tail<3>().norm(), r1 = e1.tail<3>().norm();
       std::printf("%s | %d | %.1f, %.1f | %.1f, %.1f\n", name, run, p0 * 1e3, r0 * 180 / M_PI,
