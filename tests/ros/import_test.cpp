@@ -380,6 +380,36 @@ TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
       tree.Lookup("a", "b", 5000000000LL, true).has_value());  // 5 s beyond the last sample
 }
 
+// A live tree forgets old samples but answers as before from the newest one before the cut on:
+// one sample per second turning about z, samples added out of order (Finish sorts them).
+TEST(TfTree, ForgettingKeepsTheAnswersAfterTheCut) {
+  ros::TfTree full, live;
+  constexpr std::int64_t kSecond = 1000000000;
+  for (const int k : {0, 2, 1, 3, 5, 4, 6, 7, 8, 9, 10}) {
+    ros::StampedTransform s;
+    s.header.frame_id = "palm";
+    s.header.stamp_ns = k * kSecond;
+    s.child_frame_id = "camera";
+    s.T = {Vec3(0.1 * k, 0, 0), Quat(ExpSO3(Vec3(0, 0, 0.05 * k)))};
+    full.Add(s, false);
+    live.Add(s, false);
+  }
+  full.Finish();
+  live.Finish();
+  live.Forget(5 * kSecond + kSecond / 2);  // keeps 5 s (the newest before the cut) and later
+  EXPECT_EQ(live.Edges().at("camera").samples, 6u);
+  for (const std::int64_t t :
+       {5 * kSecond, 5 * kSecond + kSecond / 4, 7 * kSecond + 3, 10 * kSecond}) {
+    const auto a = full.Lookup("palm", "camera", t), b = live.Lookup("palm", "camera", t);
+    ASSERT_TRUE(a && b) << t;
+    EXPECT_EQ(a->p, b->p) << t;
+    EXPECT_EQ(a->q.coeffs(), b->q.coeffs()) << t;
+  }
+  // Before the kept samples the edge holds no sample within the extrapolation limit (0.1 s).
+  EXPECT_TRUE(full.Lookup("palm", "camera", 2 * kSecond, true).has_value());
+  EXPECT_FALSE(live.Lookup("palm", "camera", 2 * kSecond, true).has_value());
+}
+
 // The real Allegro recording (../shared/fixtures): 16 joints named joint_0.0 ... joint_15.0, no
 // images, no torques. Every sample imports; replay runs j and renders the 3-D view of the real
 // finger motion into a video.

@@ -15,6 +15,7 @@
 #include "inhand/core/error.hpp"
 #include "inhand/io/detail/json_fields.hpp"
 #include "inhand/io/urdf_loader.hpp"
+#include "inhand/ros/camera_messages.hpp"
 #include "inhand/ros/recording.hpp"
 #include "inhand/ros/tf_tree.hpp"
 #include "inhand/sessions/image_io.hpp"
@@ -79,36 +80,6 @@ std::string PickTopic(const std::string& path, const std::vector<TopicInfo>& top
 
 std::int64_t StampOf(const Header& h, std::int64_t log_ns) {
   return h.stamp_ns != 0 ? h.stamp_ns : log_ns;
-}
-
-Intrinsics IntrinsicsOf(const CameraInfoMsg& m, const std::string& context) {
-  Intrinsics K;
-  K.width = static_cast<int>(m.width);
-  K.height = static_cast<int>(m.height);
-  K.fx = m.k[0];
-  K.fy = m.k[4];
-  K.cx = m.k[2];
-  K.cy = m.k[5];
-  if (m.k[1] != 0.0)
-    throw InputError(context + ": K has a skew term (" + std::to_string(m.k[1]) +
-                     "), which inhand's pinhole model does not have");
-  const bool zeros = std::all_of(m.d.begin(), m.d.end(), [](double v) { return v == 0.0; });
-  if (!zeros) {
-    if (m.distortion_model == "plumb_bob" || m.distortion_model == "rational_polynomial") {
-      // plumb_bob: k1 k2 t1 t2 k3 (OpenCV's order); rational_polynomial adds k4 k5 k6.
-      for (std::size_t i = 5; i < m.d.size(); ++i)
-        if (m.d[i] != 0.0)
-          throw InputError(context + ": distortion coefficient " + std::to_string(i) + " of " +
-                           m.distortion_model +
-                           " is not zero; inhand supports plumb_bob (k1, k2, p1, p2, k3)");
-      for (std::size_t i = 0; i < 5 && i < m.d.size(); ++i) K.distortion[i] = m.d[i];
-    } else {
-      throw InputError(context + ": distortion model '" + m.distortion_model +
-                       "' is not supported (expected plumb_bob)");
-    }
-  }
-  K.Validate(context);
-  return K;
 }
 
 struct JointSample {

@@ -31,9 +31,19 @@ void TfTree::Add(const StampedTransform& t, bool is_static) {
 }
 
 void TfTree::Finish() {
+  const auto earlier = [](const auto& a, const auto& b) { return a.first < b.first; };
   for (auto& [child, e] : edges_)
-    std::stable_sort(e.series.begin(), e.series.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    if (!std::is_sorted(e.series.begin(), e.series.end(), earlier))
+      std::stable_sort(e.series.begin(), e.series.end(), earlier);
+}
+
+void TfTree::Forget(std::int64_t before_ns) {
+  for (auto& [child, e] : edges_) {
+    const auto first_kept = std::lower_bound(
+        e.series.begin(), e.series.end(), before_ns,
+        [](const std::pair<std::int64_t, Pose>& a, std::int64_t t) { return a.first < t; });
+    if (first_kept - e.series.begin() > 1) e.series.erase(e.series.begin(), first_kept - 1);
+  }
 }
 
 std::map<std::string, TfTree::EdgeInfo> TfTree::Edges() const {

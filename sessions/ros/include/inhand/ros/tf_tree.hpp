@@ -18,8 +18,12 @@ class TfTree {
   // Adds the pose of `child` in `parent` at `stamp_ns` (static: valid at all times). A frame
   // with two parents keeps the first and counts the conflict.
   void Add(const StampedTransform& t, bool is_static);
-  // Sorts the time series; call after the last Add.
+  // Sorts the time series; call after the last Add (and, live, before a Lookup: a series that
+  // is in order already costs one pass).
   void Finish();
+  // A live tree's memory: drops the samples of every dynamic edge older than `before_ns`, but
+  // keeps the newest of those (a lookup just after the cut still interpolates or holds).
+  void Forget(std::int64_t before_ns);
 
   // The pose of `frame` in `base` at `t_ns`. Throws InputError when no chain joins them (naming
   // both parts of the tree), or when a dynamic edge on the chain has no sample within
