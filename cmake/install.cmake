@@ -37,6 +37,14 @@ install(FILES ${PROJECT_BINARY_DIR}/inhandConfig.cmake ${PROJECT_BINARY_DIR}/inh
 # The tool: the inhand command, the project's hand and objects (the simulator finds them in
 # PREFIX/share/inhand/assets from the executable or the Python module), the format's text.
 install(TARGETS inhand RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+if(TARGET inhand_ros_node)
+  # The live ROS 1 node, on PATH and where roslaunch looks for a package's nodes (lib/PACKAGE),
+  # with the package's manifest and launch file in share/inhand.
+  install(TARGETS inhand_ros_node RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(TARGETS inhand_ros_node RUNTIME DESTINATION ${CMAKE_INSTALL_LIBDIR}/inhand)
+  install(FILES ${PROJECT_SOURCE_DIR}/app/ros_node/package.xml DESTINATION ${CMAKE_INSTALL_DATADIR}/inhand)
+  install(FILES ${PROJECT_SOURCE_DIR}/app/ros_node/inhand.launch DESTINATION ${CMAKE_INSTALL_DATADIR}/inhand/launch)
+endif()
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/assets/hands ${PROJECT_SOURCE_DIR}/assets/objects
   DESTINATION ${CMAKE_INSTALL_DATADIR}/inhand/assets)
 install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/sessions/FORMAT.md

@@ -34,7 +34,7 @@ END_TO_END+='|^Grasp\.AllegroStaticGraspsAroundYcbScans$|^ContactField\.YcbScans
 # up in the distance field: 125 s under ASan, most of the pass's longest test); the plausibility
 # code itself stays here through HandPlausibility's other tests and the tracker's.
 END_TO_END+='|^HandPlausibility\.PenetrationAgreesWithBruteForce'
-END_TO_END+='|^Import\.RealAllegroBagReplaysWithA3dVideo$|^bench_smoke$|^install|_NOT_BUILT$'
+END_TO_END+='|^Import\.RealAllegroBagReplaysWithA3dVideo$|^bench_smoke$|^install|^ros_node_live$|_NOT_BUILT$'
 if [ $ALL -eq 1 ]; then
   GUI=ON
   TARGETS=(all)
