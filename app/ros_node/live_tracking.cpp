@@ -52,16 +52,8 @@ double LiveTracking::T(std::int64_t stamp_ns) const {
 
 std::string LiveTracking::MapColumns(const JointStateMsg& m, const std::string& context) {
   if (m.name == column_names_) return "";
-  const std::vector<std::string> names = hand_.QNames();
-  std::vector<int> column(names.size(), -1);
   std::vector<std::string> missing;
-  for (std::size_t j = 0; j < names.size(); ++j) {
-    const auto it = std::find(m.name.begin(), m.name.end(), names[j]);
-    if (it == m.name.end())
-      missing.push_back(names[j]);
-    else
-      column[j] = static_cast<int>(it - m.name.begin());
-  }
+  std::vector<int> column = ColumnsByName(hand_.QNames(), m.name, missing);
   if (!missing.empty())
     return context + ": the hand's joint" + (missing.size() > 1 ? "s " : " ") + Join(missing) +
            (missing.size() > 1 ? " are" : " is") + " not in the message, which names " +

@@ -269,15 +269,8 @@ void Importer::OnJointState(const Message& m) {
   ++report_.joint_messages;
   if (js.name != column_names_) {
     column_names_ = js.name;
-    column_.assign(names_.size(), -1);
     std::vector<std::string> missing;
-    for (std::size_t j = 0; j < names_.size(); ++j) {
-      const auto it = std::find(js.name.begin(), js.name.end(), names_[j]);
-      if (it == js.name.end())
-        missing.push_back(names_[j]);
-      else
-        column_[j] = static_cast<int>(it - js.name.begin());
-    }
+    column_ = ColumnsByName(names_, js.name, missing);
     if (!missing.empty())
       throw InputError(context + ": the hand's joint" + (missing.size() > 1 ? "s " : " ") +
                        Join(missing, 6) + (missing.size() > 1 ? " are" : " is") +

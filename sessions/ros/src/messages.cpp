@@ -1,5 +1,6 @@
 #include "inhand/ros/messages.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -37,6 +38,20 @@ Quat MessageQuaternion(double w, double x, double y, double z, const std::string
   // Unit to rounding: kept bit-identical (a round trip through a recording is exact).
   if (std::abs(n - 1.0) <= 1e-9) return Quat(w, x, y, z);
   return Quat(w / n, x / n, y / n, z / n);
+}
+
+std::vector<int> ColumnsByName(const std::vector<std::string>& wanted,
+                               const std::vector<std::string>& names,
+                               std::vector<std::string>& missing) {
+  std::vector<int> column(wanted.size(), -1);
+  for (std::size_t j = 0; j < wanted.size(); ++j) {
+    const auto it = std::find(names.begin(), names.end(), wanted[j]);
+    if (it == names.end())
+      missing.push_back(wanted[j]);
+    else
+      column[j] = static_cast<int>(it - names.begin());
+  }
+  return column;
 }
 
 }  // namespace inhand::ros

@@ -98,4 +98,10 @@ std::string NormaliseTypeName(const std::string& type_name);
 // (within 1e-3: recorders round; beyond 1e-9 it is normalised, closer it is kept as it is).
 Quat MessageQuaternion(double w, double x, double y, double z, const std::string& context);
 
+// A JointState's columns for the hand's joints, by name: where each of `wanted` stands in
+// `names` (-1 where absent); the absent ones are appended to `missing`.
+std::vector<int> ColumnsByName(const std::vector<std::string>& wanted,
+                               const std::vector<std::string>& names,
+                               std::vector<std::string>& missing);
+
 }  // namespace inhand::ros
