@@ -94,6 +94,7 @@ std::string LiveTracking::OnJointState(const JointStateMsg& m, const std::string
   const std::int64_t stamp = m.header.stamp_ns;
   if (!started_) {
     std::string error;
+    tf_.Finish();  // the start frame's samples in order
     origin_ns_ = options_.time_origin_ns.value_or(stamp);
     const std::optional<Transform> start = StartPose(stamp, error);
     if (!start) return error;
