@@ -109,11 +109,10 @@ std::string LiveTracking::OnJointState(const JointStateMsg& m, const std::string
     taken_.clear();
     tracker.TakeEvents(taken_);
     for (const TrackerEvent& e : taken_)
-      events.push_back(
-          {options_.sets[i], origin_ns_ + std::llround(e.t * 1e9), e, EventMessage(e, hand_)});
+      events.push_back({i, origin_ns_ + std::llround(e.t * 1e9), e, EventMessage(e, hand_)});
     if (tracker.stats().samples == fused) continue;  // dropped or rejected: no new estimate
     LivePose p;
-    p.set = options_.sets[i];
+    p.set = i;
     p.stamp_ns = stamp;
     p.T_PO = tracker.T_PO();
     p.covariance = tracker.covariance().topLeftCorner<6, 6>();

@@ -36,7 +36,7 @@ struct LiveOptions {
 
 // A set's estimate after a joint sample.
 struct LivePose {
-  std::string set;
+  std::size_t set = 0;  // index into LiveTracking::sets()
   std::int64_t stamp_ns = 0;
   Transform T_PO = Transform::Identity();
   Mat6 covariance = Mat6::Identity();  // of (δp, δθ), δθ about the palm frame's axes
@@ -45,7 +45,7 @@ struct LivePose {
 };
 
 struct LiveEvent {
-  std::string set;
+  std::size_t set = 0;  // index into LiveTracking::sets()
   std::int64_t stamp_ns = 0;
   TrackerEvent event;
   std::string message;  // EventMessage

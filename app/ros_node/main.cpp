@@ -16,14 +16,15 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <type_traits>
 
 #include "inhand/core/error.hpp"
 #include "inhand/io/object_loader.hpp"
@@ -50,12 +51,6 @@ Header HeaderOf(const std_msgs::Header& h) {
   return t;
 }
 
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
 // Everything the node is told, before it is checked.
 struct NodeOptions {
   std::string hand, object, params_file, params_json,
@@ -66,36 +61,6 @@ struct NodeOptions {
   double time_origin = -1.0, horizon = 0.5;
   bool deterministic = false;
 };
-
-// The flags given on the command line win; the rest come from the node's private parameters.
-void FillFromParameters(const CLI::App& app, const ::ros::NodeHandle& pnh, NodeOptions& o) {
-  const auto param = [&](const char* flag, auto& value) {
-    std::string name = std::string(flag).substr(2);
-    std::replace(name.begin(), name.end(), '-', '_');
-    if (app.count(flag) == 0) pnh.getParam(name, value);
-  };
-  param("--hand", o.hand);
-  param("--object", o.object);
-  param("--params", o.params_file);
-  param("--params-json", o.params_json);
-  param("--sets", o.sets);
-  param("--joint-states", o.joint_states);
-  param("--image", o.image);
-  param("--compressed-image", o.compressed_image);
-  param("--camera-info", o.camera_info);
-  param("--effort-is", o.effort_is);
-  param("--palm-frame", o.palm_frame);
-  param("--camera-frame", o.camera_frame);
-  param("--start", o.start);
-  param("--start-frame", o.start_frame);
-  param("--start-sigma", o.start_sigma);
-  param("--object-frame-prefix", o.object_frame_prefix);
-  param("--time-origin", o.time_origin);
-  param("--horizon", o.horizon);
-  param("--deterministic", o.deterministic);
-  param("--stats-out", o.stats_out);
-  param("--package", o.packages);
-}
 
 std::vector<double> Numbers(const std::string& text, const std::string& flag, std::size_t n) {
   std::string s = text;
@@ -290,8 +255,8 @@ class Node {
     tf2_msgs::TFMessage tf;
     for (std::size_t k = 0; k < poses_.size(); ++k) {
       const LivePose& p = poses_[k];
-      const std::size_t i = static_cast<std::size_t>(
-          std::find(live_.sets().begin(), live_.sets().end(), p.set) - live_.sets().begin());
+      const std::size_t i = p.set;
+      const std::string& set = live_.sets()[i];
       geometry_msgs::PoseWithCovarianceStamped out;
       out.header.stamp = StampOf(p.stamp_ns);
       out.header.frame_id = live_.palm_frame();
@@ -309,7 +274,7 @@ class Node {
       pose_pub_[i].publish(out);
       geometry_msgs::TransformStamped t;
       t.header = out.header;
-      t.child_frame_id = options_.object_frame_prefix + p.set;
+      t.child_frame_id = options_.object_frame_prefix + set;
       t.transform.translation.x = out.pose.pose.position.x;
       t.transform.translation.y = out.pose.pose.position.y;
       t.transform.translation.z = out.pose.pose.position.z;
@@ -317,7 +282,7 @@ class Node {
       tf.transforms.push_back(t);
       if (p.health_changed) {
         std_msgs::String h;
-        h.data = Json{{"set", p.set},
+        h.data = Json{{"set", set},
                       {"stamp", p.stamp_ns * 1e-9},
                       {"state", HealthStateName(p.health.state)},
                       {"cause", HealthCauseName(p.health.cause)},
@@ -330,7 +295,7 @@ class Node {
     if (!tf.transforms.empty()) tf_pub_.publish(tf);
     for (const LiveEvent& e : events_) {
       std_msgs::String s;
-      s.data = Json{{"set", e.set},
+      s.data = Json{{"set", live_.sets()[e.set]},
                     {"stamp", e.stamp_ns * 1e-9},
                     {"kind", EventKindName(e.event.kind)},
                     {"subject", e.event.subject},
@@ -404,7 +369,7 @@ class Node {
   void OnCompressedImage(const sensor_msgs::CompressedImage::ConstPtr& m) {
     CompressedImageMsg im;
     im.header = HeaderOf(m->header);
-    im.format = Lower(m->format);
+    im.format = m->format;
     im.data = m->data;
     Fuse(
         im.header, [&] { return ImageOf(im, options_.compressed_image); },
@@ -443,62 +408,66 @@ int Run(int argc, char** argv) {
       "inhand's estimator as a ROS 1 node: joint states, a camera and TF in; the object's "
       "pose per modality set out"};
   NodeOptions o;
-  app.add_option("--hand", o.hand, "the hand's URDF (parameter ~hand)");
-  app.add_option("--package", o.packages, "NAME=DIR for package:// URIs (repeatable)");
-  app.add_option("--object", o.object, "the object's description (.json or .urdf)");
-  app.add_option("--sets", o.sets,
-                 "modality sets, comma-separated: j, jt, ja, jf, jta, jtf (default jt)");
-  app.add_option("--params", o.params_file,
-                 "tracker parameters (JSON file, as replay's params.json)");
-  app.add_option("--params-json", o.params_json, "tracker parameters as JSON text");
-  app.add_option("--joint-states", o.joint_states,
-                 "sensor_msgs/JointState topic (default /joint_states)");
-  app.add_option("--effort-is", o.effort_is,
-                 "external: JointState.effort holds the external joint torques; none (default)");
-  app.add_option("--image", o.image, "sensor_msgs/Image topic");
-  app.add_option("--compressed-image", o.compressed_image,
-                 "sensor_msgs/CompressedImage topic (jpeg or png)");
-  app.add_option("--camera-info", o.camera_info,
-                 "sensor_msgs/CameraInfo topic (default: camera_info beside the image)");
-  app.add_option("--palm-frame", o.palm_frame,
-                 "TF frame of the palm (default: the URDF's root link)");
-  app.add_option("--camera-frame", o.camera_frame,
-                 "TF frame of the camera (default: the images' frame_id)");
-  app.add_option("--start", o.start,
-                 "the object's pose in the palm frame at the start: 'x y z qw qx qy qz' [m]");
-  app.add_option("--start-frame", o.start_frame,
-                 "or: the TF frame whose pose at the first joint state is the start");
-  app.add_option(
-      "--start-sigma", o.start_sigma,
-      "'position orientation bias' σ at the start [m rad rad] (default 0.02 0.087 0.087)");
-  app.add_option("--object-frame-prefix", o.object_frame_prefix,
-                 "TF child frames published: PREFIX<set> (default object_)");
-  app.add_option("--time-origin", o.time_origin,
-                 "the stamp [s] that is t = 0 (default: the first joint state's)");
-  app.add_option("--horizon", o.horizon,
-                 "[s] images captured longer ago than this are dropped (default 0.5)");
-  app.add_flag(
+  // Each flag once: on the command line, and as the node's private parameter of the same name
+  // with '_' for '-' (~start_frame for --start-frame), read when the flag is not given.
+  std::vector<std::function<void(const ::ros::NodeHandle&)>> from_parameters;
+  const auto option = [&](const char* flag, auto& value, const char* help) {
+    CLI::Option* opt = nullptr;
+    if constexpr (std::is_same_v<std::decay_t<decltype(value)>, bool>)
+      opt = app.add_flag(flag, value, help);
+    else
+      opt = app.add_option(flag, value, help);
+    from_parameters.push_back([opt, flag, &value](const ::ros::NodeHandle& pnh) {
+      std::string name = std::string(flag).substr(2);
+      std::replace(name.begin(), name.end(), '-', '_');
+      if (opt->count() == 0) pnh.getParam(name, value);
+    });
+  };
+  option("--hand", o.hand, "the hand's URDF (parameter ~hand)");
+  option("--package", o.packages, "NAME=DIR for package:// URIs (repeatable)");
+  option("--object", o.object, "the object's description (.json or .urdf)");
+  option("--sets", o.sets, "modality sets, comma-separated: j, jt, ja, jf, jta, jtf (default jt)");
+  option("--params", o.params_file, "tracker parameters (JSON file, as replay's params.json)");
+  option("--params-json", o.params_json, "tracker parameters as JSON text");
+  option("--joint-states", o.joint_states, "sensor_msgs/JointState topic (default /joint_states)");
+  option("--effort-is", o.effort_is,
+         "external: JointState.effort holds the external joint torques; none (default)");
+  option("--image", o.image, "sensor_msgs/Image topic");
+  option("--compressed-image", o.compressed_image,
+         "sensor_msgs/CompressedImage topic (jpeg or png)");
+  option("--camera-info", o.camera_info,
+         "sensor_msgs/CameraInfo topic (default: camera_info beside the image)");
+  option("--palm-frame", o.palm_frame, "TF frame of the palm (default: the URDF's root link)");
+  option("--camera-frame", o.camera_frame,
+         "TF frame of the camera (default: the images' frame_id)");
+  option("--start", o.start,
+         "the object's pose in the palm frame at the start: 'x y z qw qx qy qz' [m]");
+  option("--start-frame", o.start_frame,
+         "or: the TF frame whose pose at the first joint state is the start");
+  option("--start-sigma", o.start_sigma,
+         "'position orientation bias' σ at the start [m rad rad] (default 0.02 0.087 0.087)");
+  option("--object-frame-prefix", o.object_frame_prefix,
+         "TF child frames published: PREFIX<set> (default object_)");
+  option("--time-origin", o.time_origin,
+         "the stamp [s] that is t = 0 (default: the first joint state's)");
+  option("--horizon", o.horizon,
+         "[s] images captured longer ago than this are dropped (default 0.5)");
+  option(
       "--deterministic", o.deterministic,
       "vision on the callback thread (bit-stable, slower joint rate while an image is processed)");
-  app.add_option("--stats-out", o.stats_out,
-                 "write the counts and latencies here (JSON) at the end");
+  option("--stats-out", o.stats_out, "write the counts and latencies here (JSON) at the end");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
   try {
-    ::ros::NodeHandle pnh("~");
-    FillFromParameters(app, pnh, o);
+    const ::ros::NodeHandle pnh("~");
+    for (const auto& fill : from_parameters) fill(pnh);
     if (o.hand.empty()) throw InputError("--hand (or ~hand): the hand's URDF is needed");
     if (o.object.empty()) throw InputError("--object (or ~object): the object is needed");
     HandLoadOptions hand_options;
-    for (const std::string& p : o.packages) {
-      const std::size_t eq = p.find('=');
-      if (eq == std::string::npos || eq == 0)
-        throw InputError("--package: '" + p + "', expected NAME=DIR");
-      hand_options.packages.dirs[p.substr(0, eq)] = p.substr(eq + 1);
-    }
+    for (const std::string& p : o.packages) hand_options.packages.AddSpec(p);
     hand_options.load_visual_meshes = true;
     const HandModel hand = LoadHandModel(o.hand, hand_options);
     const ObjectModel object = LoadObjectModel(o.object, hand_options.packages);

@@ -8,6 +8,19 @@
 
 namespace inhand::ros {
 
+namespace {
+
+// Whether a CompressedImage's format names a codec inhand decodes (jpeg or png).
+bool IsDecodableFormat(const std::string& format) {
+  std::string f = format;
+  std::transform(f.begin(), f.end(), f.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  return f.find("png") != std::string::npos || f.find("jpeg") != std::string::npos ||
+         f.find("jpg") != std::string::npos;
+}
+
+}  // namespace
+
 // A sensor_msgs/Image as RGB. Throws InputError naming the encoding when it is not supported.
 Image8 ImageOf(const ImageMsg& m, const std::string& context) {
   const std::string& e = m.encoding;
@@ -51,14 +64,6 @@ Image8 ImageOf(const ImageMsg& m, const std::string& context) {
     }
   }
   return out;
-}
-
-bool IsDecodableFormat(const std::string& format) {
-  std::string f = format;
-  std::transform(f.begin(), f.end(), f.begin(),
-                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-  return f.find("png") != std::string::npos || f.find("jpeg") != std::string::npos ||
-         f.find("jpg") != std::string::npos;
 }
 
 Image8 ImageOf(const CompressedImageMsg& m, const std::string& context) {

@@ -18,7 +18,5 @@ Image8 ImageOf(const CompressedImageMsg& m, const std::string& context);
 // sensor_msgs/CameraInfo's pinhole and plumb_bob distortion. Throws InputError naming `context`
 // for a skew term, another distortion model or intrinsics that are not valid.
 Intrinsics IntrinsicsOf(const CameraInfoMsg& m, const std::string& context);
-// Whether a CompressedImage's format names a codec inhand decodes (jpeg or png).
-bool IsDecodableFormat(const std::string& format);
 
 }  // namespace inhand::ros
