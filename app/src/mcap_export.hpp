@@ -1,13 +1,13 @@
 #pragma once
-// replay --mcap: the replay as an MCAP file for Foxglove and Lichtblick. Each set's pose
+// replay --mcap: the replay as an MCAP file for Foxglove and Lichtblick. Every channel is a ros2msg
+// schema with CDR messages, which both viewers decode natively: each set's pose
 // (foxglove_msgs/msg/PoseInFrame on /inhand/pose/SET), the transforms palm -> object_SET,
-// object_truth and camera (foxglove_msgs/msg/FrameTransform on /tf) and the camera images
-// (foxglove_msgs/msg/CompressedImage: the session's PNG or JPEG bytes as they are) are ros2msg
-// schemas with CDR messages, which both viewers decode natively; each set's errors and sigmas
-// (/inhand/errors, at joint rate), the Fig.-1 overlays (foxglove.ImageAnnotations), the contacts
-// and forces (foxglove.SceneUpdate) and the events (foxglove.Log on /inhand/events, name
-// "inhand/SET", the event's own fields beside the log's, logged at the sample that reported them)
-// are still JSON with JSON schemas. The file is chunked, zstd-compressed and indexed
+// object_truth and camera (FrameTransform on /tf), the camera images (CompressedImage: the
+// session's PNG or JPEG bytes as they are), the Fig.-1 overlays (ImageAnnotations), the contacts
+// and forces (SceneUpdate), the events as log lines (Log on /inhand/log); and two types of ours,
+// defined in the file's schemas: each set's errors, sigmas and health at joint rate
+// (inhand_msgs/msg/State on /inhand/errors) and the events as events.csv has them
+// (inhand_msgs/msg/Event on /inhand/events). The file is chunked, zstd-compressed and indexed
 // (ros/mcap_writer.hpp).
 #include <memory>
 #include <string>
@@ -36,7 +36,8 @@ class McapExport {
   const SessionPlayer& p_;
   std::unique_ptr<ros::McapWriter> w_;
   std::vector<std::uint16_t> pose_channels_;
-  std::uint16_t tf_ = 0, errors_ = 0, image_ = 0, annotations_ = 0, scene_ = 0, events_ = 0;
+  std::uint16_t tf_ = 0, errors_ = 0, image_ = 0, annotations_ = 0, scene_ = 0, events_ = 0,
+                log_ = 0;
 };
 
 }  // namespace inhand::app

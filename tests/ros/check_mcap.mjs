@@ -3,7 +3,7 @@
 // per topic its schema, encodings and message count; the time span; whether every JSON message
 // parses; and every CDR message decoded by the official deserializer
 // (@foxglove/rosmsg2-serialization over the file's ros2msg schema, parsed by @foxglove/rosmsg):
-// the failures counted, each topic's first message kept (image data as its length and first
+// the failures counted, each topic's first and last messages kept (image data as its length and first
 // bytes). Exit 1 when the reader rejects the file.
 //   node check_mcap.mjs FILE
 import { readFileSync } from "node:fs";
@@ -26,7 +26,7 @@ try {
   reader.append(new Uint8Array(readFileSync(process.argv[2])));
   const schemas = new Map(), channels = new Map(), topics = {};
   let start = null, end = null, jsonErrors = 0, cdrErrors = 0, statistics = null, footer = false;
-  const readers = new Map(), first = {};
+  const readers = new Map(), first = {}, last = {};
   for (let r; (r = reader.nextRecord()); ) {
     if (r.type === "Schema") schemas.set(r.id, r);
     else if (r.type === "Channel") {
@@ -48,10 +48,9 @@ try {
             readers.set(c.schemaId, new MessageReader(parse(new TextDecoder().decode(s.data), { ros2: true })));
           }
           const m = readers.get(c.schemaId).readMessage(r.data);
-          if (!(c.topic in first)) {
-            if (m.data instanceof Uint8Array) m.data = { length: m.data.length, head: Array.from(m.data.slice(0, 8)) };
-            first[c.topic] = m;
-          }
+          if (m.data instanceof Uint8Array) m.data = { length: m.data.length, head: Array.from(m.data.slice(0, 8)) };
+          first[c.topic] ??= m;
+          last[c.topic] = m;
         } catch (e) { cdrErrors += 1; }
       }
     } else if (r.type === "Statistics") statistics = { messages: Number(r.messageCount), channels: r.channelCount };
@@ -59,7 +58,7 @@ try {
   }
   if (!reader.done()) throw new Error(`${reader.bytesRemaining()} bytes left unread`);
   console.log(JSON.stringify({ topics, start_ns: String(start), end_ns: String(end), json_errors: jsonErrors,
-    cdr_errors: cdrErrors, first, statistics, footer }, (k, v) => (typeof v === "bigint" ? String(v) : v)));
+    cdr_errors: cdrErrors, first, last, statistics, footer }, (k, v) => (typeof v === "bigint" ? String(v) : v)));
 } catch (e) {
   console.error(`check_mcap: ${process.argv[2]}: ${e.message}`);
   process.exit(1);

@@ -156,10 +156,16 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   EXPECT_EQ(j.at("topics").at("/inhand/pose/j").at("schema"), "foxglove_msgs/msg/PoseInFrame");
   EXPECT_EQ(j.at("topics").at("/camera/image").at("schema"), "foxglove_msgs/msg/CompressedImage");
   EXPECT_EQ(j.at("topics").at("/tf").at("schema"), "foxglove_msgs/msg/FrameTransform");
-  EXPECT_EQ(j.at("topics").at("/inhand/contacts").at("schema"), "foxglove.SceneUpdate");
-  for (const char* topic : {"/tf", "/camera/image", "/inhand/pose/jta"}) {
-    EXPECT_EQ(j.at("topics").at(topic).at("message_encoding"), "cdr") << topic;
-    EXPECT_EQ(j.at("topics").at(topic).at("schema_encoding"), "ros2msg") << topic;
+  EXPECT_EQ(j.at("topics").at("/inhand/contacts").at("schema"), "foxglove_msgs/msg/SceneUpdate");
+  EXPECT_EQ(j.at("topics").at("/camera/annotations").at("schema"),
+            "foxglove_msgs/msg/ImageAnnotations");
+  EXPECT_EQ(j.at("topics").at("/inhand/errors").at("schema"), "inhand_msgs/msg/State");
+  EXPECT_EQ(j.at("topics").at("/inhand/log").at("schema"), "foxglove_msgs/msg/Log");
+  EXPECT_EQ(j.at("topics").at("/inhand/events").at("schema"), "inhand_msgs/msg/Event");
+  // Every channel binary: ros2msg schemas, CDR messages, none JSON.
+  for (const auto& [topic, entry] : j.at("topics").items()) {
+    EXPECT_EQ(entry.at("message_encoding"), "cdr") << topic;
+    EXPECT_EQ(entry.at("schema_encoding"), "ros2msg") << topic;
   }
   // Every CDR message decoded by @foxglove/rosmsg2-serialization; the first image is the
   // session's PNG byte for byte in length and signature, stamped at its capture time; the first
@@ -196,8 +202,48 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   const long events = std::count(events_csv.begin(), events_csv.end(), '\n') - 1;
   EXPECT_GT(events, 4);  // the fingers close on the bottle
   EXPECT_EQ(count("/inhand/events"), events);
-  EXPECT_EQ(j.at("topics").at("/inhand/events").at("schema"), "foxglove.Log");
-  EXPECT_EQ(j.at("statistics").at("messages"), 6 * n + 4 * frames + events);
+  EXPECT_EQ(count("/inhand/log"), events);
+  // The last event is events.csv's last row; the log line says the same.
+  const std::string last_row = events_csv.substr(events_csv.rfind('\n', events_csv.size() - 2) +
+                                                 1);  // t,set,kind,subject,value,...
+  const nlohmann::json& event = j.at("last").at("/inhand/events");
+  const std::string event_prefix = event.at("set").get<std::string>() + "," +
+                                   event.at("kind").get<std::string>() + "," +
+                                   event.at("subject").get<std::string>() + ",";
+  EXPECT_NE(last_row.find("," + event_prefix), std::string::npos) << last_row;
+  EXPECT_NE(last_row.find(event.at("message").get<std::string>()), std::string::npos);
+  EXPECT_EQ(j.at("last").at("/inhand/log").at("name"),
+            "inhand/" + event.at("set").get<std::string>());
+  // The last state per set is estimates.csv's last row of that set (jta, last in the file).
+  const std::string estimates_csv = test::ReadFile(dir / "r/estimates.csv");
+  std::vector<std::string> cells_jta;
+  std::istringstream last_estimate(
+      estimates_csv.substr(estimates_csv.rfind('\n', estimates_csv.size() - 2) + 1));
+  for (std::string cell; std::getline(last_estimate, cell, ',');) cells_jta.push_back(cell);
+  ASSERT_GT(cells_jta.size(), 21u);
+  ASSERT_EQ(cells_jta[1], "jta");
+  const nlohmann::json& state = j.at("last").at("/inhand/errors").at("sets");
+  ASSERT_EQ(state.size(), 2u);
+  EXPECT_EQ(state[0].at("set"), "j");
+  const nlohmann::json& jta = state[1];
+  EXPECT_EQ(jta.at("set"), "jta");
+  EXPECT_NEAR(jta.at("sigma_position_mm").at("0").get<double>(), std::stod(cells_jta[9]) * 1000,
+              1e-9);
+  EXPECT_NEAR(jta.at("position_error_mm").get<double>(), std::stod(cells_jta[15]), 1e-9);
+  EXPECT_NEAR(jta.at("penetration_mm").get<double>(), std::stod(cells_jta[17]), 1e-9);
+  EXPECT_EQ(jta.at("health"), cells_jta[19]);
+  EXPECT_EQ(jta.at("health_cause"), cells_jta[20]);
+  // The last frame's overlays: a circle and a name per set, contact spheres per set.
+  const nlohmann::json& annotations = j.at("last").at("/camera/annotations");
+  ASSERT_EQ(annotations.at("texts").size(), 2u);
+  EXPECT_EQ(annotations.at("texts")[1].at("text"), "jta");
+  EXPECT_EQ(annotations.at("circles").size(), 2u);
+  const nlohmann::json& entities = j.at("last").at("/inhand/contacts").at("entities");
+  ASSERT_EQ(entities.size(), 2u);
+  EXPECT_EQ(entities[1].at("id"), "contacts_jta");
+  EXPECT_EQ(entities[1].at("frame_id"), "palm");
+  EXPECT_GT(entities[1].at("spheres").size(), 0u);  // the fingers hold the bottle
+  EXPECT_EQ(j.at("statistics").at("messages"), 6 * n + 4 * frames + 2 * events);
   EXPECT_TRUE(j.at("footer").get<bool>());
   // Read again as a viewer seeks: through the summary, the chunk and message indexes (every CRC
   // checked), zstd chunks; the same messages per topic, and one second read alone.
