@@ -25,6 +25,19 @@ namespace {
 const std::string tools = test::SourceDir() + "/tests/ros";
 bool HaveNodeTools() { return fs::is_directory(tools + "/node/node_modules/@mcap/core"); }
 
+// The bytes of a session's camera images, each frame counted (a file used twice counts twice).
+double ImageBytes(const Session& s) {
+  double bytes = 0;
+  for (const CameraFrame& f : s.camera_frames())
+    bytes += static_cast<double>(fs::file_size(s.Resolve(f.image)));
+  return bytes;
+}
+
+// The size an export of `s` may take: 1.15 x its image bytes + 2 MB per minute.
+double McapSizeBound(const Session& s) {
+  return 1.15 * ImageBytes(s) + 2e6 * (s.t(s.num_samples() - 1) - s.t(0)) / 60.0;
+}
+
 int Shell(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
 
 // The simulated session made representable in a recording: times on whole nanoseconds (ROS
@@ -135,6 +148,10 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
                             " --no-video --mcap --modalities j,jta --out " + (dir / "r"))
                 .exit_code,
             0);
+  const double size = static_cast<double>(fs::file_size(dir / "r/replay.mcap"));
+  EXPECT_LE(size, McapSizeBound(s));
+  std::printf("replay.mcap: %.1f MB for %.1f MB of images (bound %.1f MB)\n", size / 1e6,
+              ImageBytes(s) / 1e6, McapSizeBound(s) / 1e6);
   const std::string json_path = dir / "check.json";
   ASSERT_EQ(std::system(
                 ("node " + tools + "/check_mcap.mjs " + (dir / "r/replay.mcap") + " > " + json_path)
@@ -263,6 +280,53 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   EXPECT_GT(x.at("window").at("messages").get<long>(), 2 * 500);
   std::printf("one second read through the index: %ld messages in %.1f ms\n",
               x.at("window").at("messages").get<long>(), x.at("window").at("ms").get<double>());
+}
+
+// A long recording (a simulated session played forward and backward for two minutes by
+// scripts/long_session.py): the export stays within its size bound, and seconds drawn across it
+// read through the index hold every sample of the second.
+TEST(Export, LongRecordingStaysSmallAndSeeksThroughItsIndex) {
+  if (!HaveNodeTools())
+    GTEST_SKIP()
+        << "tests/ros/node/node_modules is absent: run scripts/install-deps.sh (npm ci there)";
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("simulate brush-rotation --noise paper --seed 3 --out " + (dir / "sim"))
+                .exit_code,
+            0);
+  ASSERT_EQ(Shell("python3 " + test::SourceDir() + "/scripts/long_session.py " + (dir / "sim") +
+                  " " + (dir / "long") + " --minutes 2"),
+            0);
+  const Session s = Session::Load(dir / "long");
+  EXPECT_NEAR(s.t(s.num_samples() - 1) - s.t(0), 120.0, 1e-6);
+  ASSERT_EQ(test::RunInhand("replay " + (dir / "long") +
+                            " --no-video --mcap --modalities jt --out " + (dir / "r"))
+                .exit_code,
+            0);
+  const double size = static_cast<double>(fs::file_size(dir / "r/replay.mcap"));
+  EXPECT_LE(size, McapSizeBound(s));
+  std::printf("2-minute replay.mcap: %.1f MB for %.1f MB of images (bound %.1f MB)\n", size / 1e6,
+              ImageBytes(s) / 1e6, McapSizeBound(s) / 1e6);
+  const std::string indexed_path = dir / "indexed.json";
+  ASSERT_EQ(std::system(("node " + tools + "/check_mcap_indexed.mjs " + (dir / "r/replay.mcap") +
+                         " 11 5 > " + indexed_path)
+                            .c_str()),
+            0);
+  const nlohmann::json x = nlohmann::json::parse(test::ReadFile(indexed_path));
+  EXPECT_EQ(x.at("topics").at("/inhand/pose/jt").get<long>(), s.num_samples());
+  EXPECT_EQ(x.at("topics").at("/camera/image").get<long>(),
+            static_cast<long>(s.camera_frames().size()));
+  ASSERT_EQ(x.at("windows").size(), 5u);
+  double earliest = 1e30, latest = 0;
+  for (const nlohmann::json& w : x.at("windows")) {
+    const double from = std::stod(w.at("start_ns").get<std::string>()) / 1e9;
+    earliest = std::min(earliest, from);
+    latest = std::max(latest, from);
+    // jt's pose, its errors and two transforms per 2 ms sample, an image per 0.1 s.
+    EXPECT_GE(w.at("messages").get<long>(), 4 * 499 + 9) << from;
+    std::printf("one second from %.2f s read through the index: %ld messages in %.1f ms\n", from,
+                w.at("messages").get<long>(), w.at("ms").get<double>());
+  }
+  EXPECT_GT(latest - earliest, 30.0);  // the windows spread over the recording
 }
 
 }  // namespace
