@@ -155,6 +155,7 @@ std::string LiveTracking::OnImage(const Header& header, const Image8& image,
   } catch (const InputError& e) {
     return context + ": " + e.what();
   }
+  last_image_ = LiveImage{header.stamp_ns, pose, *K_};
   return "";
 }
 

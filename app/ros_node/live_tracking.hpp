@@ -51,6 +51,13 @@ struct LiveEvent {
   std::string message;  // EventMessage
 };
 
+// The newest image the trackers were given, with the camera it was taken from.
+struct LiveImage {
+  std::int64_t stamp_ns = 0;
+  Transform T_PC = Transform::Identity();
+  Intrinsics K;
+};
+
 class LiveTracking {
  public:
   // The models must outlive this. Throws InputError for a set the options cannot run (torques
@@ -73,6 +80,9 @@ class LiveTracking {
   const std::vector<std::string>& sets() const { return options_.sets; }
   const Tracker& tracker(std::size_t i) const { return *trackers_[i]; }
   std::string palm_frame() const { return palm_; }
+  const std::optional<LiveImage>& last_image() const { return last_image_; }
+  // The time [s] since the origin of a stamp.
+  double T(std::int64_t stamp_ns) const;
   // One line per set: samples, images fused, dropped and late, relocalizations, health.
   std::vector<std::string> Summary() const;
 
@@ -91,8 +101,8 @@ class LiveTracking {
   std::vector<int> column_;
   Eigen::VectorXd q_, tau_;
   std::vector<TrackerEvent> taken_;
+  std::optional<LiveImage> last_image_;
 
-  double T(std::int64_t stamp_ns) const;
   std::string MapColumns(const JointStateMsg& m, const std::string& context);
   std::optional<Transform> StartPose(std::int64_t stamp_ns, std::string& error) const;
 };

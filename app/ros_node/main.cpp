@@ -1,8 +1,9 @@
 // inhand_ros_node: the estimator live on a ROS 1 robot. Subscribes the hand's JointState, a
 // camera (Image or CompressedImage, with CameraInfo) and TF; publishes per modality set the
 // object's PoseWithCovarianceStamped, TF palm → object_<set>, the health (latched) and the
-// tracker's events. Options from flags, else from the node's private parameters (~name, the flag's
-// name with '_' for '-'); README "A live ROS 1 node".
+// tracker's events; optionally the annotated camera image (Fig. 1) at a reduced rate. Options from
+// flags, else from the node's private parameters (~name, the flag's name with '_' for '-'); README
+// "A live ROS 1 node".
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 
@@ -26,6 +27,8 @@
 #include <sstream>
 #include <type_traits>
 
+#include "annotator.hpp"
+#include "inhand/app/evaluation.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
@@ -58,7 +61,7 @@ struct NodeOptions {
       effort_is = "none", palm_frame, camera_frame, start, start_frame, start_sigma,
       object_frame_prefix = "object_", stats_out;
   std::vector<std::string> packages;
-  double time_origin = -1.0, horizon = 0.5;
+  double time_origin = -1.0, horizon = 0.5, annotated_rate = 0.0;
   bool deterministic = false;
 };
 
@@ -134,7 +137,10 @@ std::string CameraInfoTopic(const NodeOptions& o) {
 class Node {
  public:
   Node(const NodeOptions& o, const HandModel& hand, const ObjectModel& object)
-      : options_(o), live_(hand, object, LiveOptionsOf(o)), pnh_("~") {
+      : options_(o), hand_(hand), live_(hand, object, LiveOptionsOf(o)), pnh_("~") {
+    if (!(o.annotated_rate >= 0.0 && o.annotated_rate <= 30.0))
+      throw InputError("--annotated-rate: " + std::to_string(o.annotated_rate) +
+                       ", expected [0, 30] Hz (0: no annotated image)");
     for (const std::string& set : live_.sets()) {
       pose_pub_.push_back(
           pnh_.advertise<geometry_msgs::PoseWithCovarianceStamped>(set + "/pose", 100));
@@ -162,6 +168,21 @@ class Node {
         subs_.push_back(
             images.subscribe(o.compressed_image, 4, &Node::OnCompressedImage, this, no_delay));
       if (!o.deterministic) image_spinner_.start();
+      if (o.annotated_rate > 0.0) {
+        annotated_pub_ = pnh_.advertise<sensor_msgs::Image>("annotated", 2);
+        annotator_ = std::make_unique<Annotator>(
+            object, [this](const AnnotationRequest& r, const Image8& picture) {
+              sensor_msgs::Image m;
+              m.header.stamp = StampOf(r.stamp_ns);
+              m.header.frame_id = r.frame_id;
+              m.height = static_cast<std::uint32_t>(picture.height);
+              m.width = static_cast<std::uint32_t>(picture.width);
+              m.encoding = "rgb8";
+              m.step = 3 * m.width;
+              m.data.assign(picture.data.begin(), picture.data.end());
+              annotated_pub_.publish(m);
+            });
+      }
       ROS_INFO("inhand: images from %s, intrinsics from %s",
                (o.image.empty() ? o.compressed_image : o.image).c_str(), info.c_str());
     }
@@ -173,6 +194,11 @@ class Node {
   // The figures at the end: each set's counts and the joint callback's latency.
   void Finish() {
     image_spinner_.stop();
+    if (annotator_) {
+      if (!annotator_->error().empty())
+        ROS_ERROR("inhand: the annotated image: %s", annotator_->error().c_str());
+      ROS_INFO("inhand: %ld annotated images published", annotator_->drawn());
+    }
     for (const std::string& line : live_.Summary()) ROS_INFO("inhand: %s", line.c_str());
     std::vector<double> l = latency_us_;
     std::sort(l.begin(), l.end());
@@ -188,6 +214,7 @@ class Node {
     out["joint_states"] = l.size();
     out["latency_us"] = {{"p50", at(0.5)}, {"p99", at(0.99)}, {"max", l.empty() ? 0.0 : l.back()}};
     out["messages_not_used"] = not_used_.load();
+    if (annotator_) out["annotated_images"] = annotator_->drawn();
     // The slowest joint states, by their order of arrival: where the tail comes from.
     std::vector<std::size_t> order(latency_us_.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
@@ -210,6 +237,7 @@ class Node {
 
  private:
   NodeOptions options_;
+  const HandModel& hand_;
   LiveTracking live_;
   ::ros::NodeHandle nh_, pnh_, image_nh_;
   ::ros::CallbackQueue image_queue_;
@@ -229,6 +257,48 @@ class Node {
   std::vector<LiveEvent> events_;
   std::vector<double> latency_us_;
   std::atomic<long> not_used_{0};
+  // The annotated image: the newest image used, drawn after the joint state that follows it.
+  ::ros::Publisher annotated_pub_;
+  std::unique_ptr<Annotator> annotator_;
+  struct UsedImage {
+    Header header;
+    Image8 image;
+  };
+  std::optional<UsedImage> to_annotate_;
+  std::int64_t last_annotated_ns_ = 0;
+
+  // An image the trackers used: kept for the annotated image when one is due.
+  void Used(const Header& header, const Image8& image) {
+    if (!annotator_ || !live_.last_image() || live_.last_image()->stamp_ns != header.stamp_ns)
+      return;
+    const double period = 1.0 / options_.annotated_rate;
+    if (last_annotated_ns_ != 0 && (header.stamp_ns - last_annotated_ns_) * 1e-9 < period - 1e-6)
+      return;
+    last_annotated_ns_ = header.stamp_ns;
+    to_annotate_ = UsedImage{header, image};
+  }
+
+  // After a joint state: the picture of the image kept, with every set's estimate now.
+  void Annotate() {
+    if (!to_annotate_) return;
+    const LiveImage& used = *live_.last_image();
+    AnnotationRequest r;
+    r.stamp_ns = to_annotate_->header.stamp_ns;
+    r.frame_id = to_annotate_->header.frame_id;
+    r.camera = std::move(to_annotate_->image);
+    to_annotate_.reset();
+    r.T_PC = used.T_PC;
+    r.K = used.K;
+    for (std::size_t i = 0; i < live_.sets().size(); ++i) {
+      const Tracker& tracker = live_.tracker(i);
+      app::EstimateRecord record;
+      app::RecordContacts(tracker.trace(), record);
+      app::RecordTrackerState(tracker, record);
+      r.names.push_back(live_.sets()[i]);
+      r.sets.push_back(app::CaptureSet(tracker, record, live_.T(r.stamp_ns), hand_));
+    }
+    annotator_->Request(std::move(r));
+  }
 
   void Complain(const std::string& error) {
     if (error.empty()) return;
@@ -247,7 +317,11 @@ class Node {
       std::lock_guard<std::mutex> lock(decoded_mutex_);
       adding_.swap(decoded_);
     }
-    for (const DecodedImage& d : adding_) Complain(live_.OnImage(d.header, d.image, d.context));
+    for (const DecodedImage& d : adding_) {
+      const std::string error = live_.OnImage(d.header, d.image, d.context);
+      Complain(error);
+      if (error.empty()) Used(d.header, d.image);
+    }
     adding_.clear();
     poses_.clear();
     events_.clear();
@@ -309,6 +383,7 @@ class Node {
     if (latency_us_.size() < latency_us_.capacity())
       latency_us_.push_back(
           std::chrono::duration<double, std::micro>(Clock::now() - arrival).count());
+    Annotate();  // after the poses are out (not in the latency: it copies an image)
   }
 
   void OnTfMessage(const tf2_msgs::TFMessage& m, bool is_static) {
@@ -388,7 +463,9 @@ class Node {
       return;
     }
     if (options_.deterministic) {
-      Complain(live_.OnImage(header, image, context));
+      const std::string error = live_.OnImage(header, image, context);
+      Complain(error);
+      if (error.empty()) Used(header, image);
       return;
     }
     std::lock_guard<std::mutex> lock(decoded_mutex_);
@@ -455,6 +532,9 @@ int Run(int argc, char** argv) {
   option(
       "--deterministic", o.deterministic,
       "vision on the callback thread (bit-stable, slower joint rate while an image is processed)");
+  option("--annotated-rate", o.annotated_rate,
+         "[Hz] publish ~annotated (sensor_msgs/Image, rgb8): the camera image with every set's "
+         "estimate drawn over it, at most this often (default 0: not published)");
   option("--stats-out", o.stats_out, "write the counts and latencies here (JSON) at the end");
   try {
     app.parse(argc, argv);

@@ -61,6 +61,34 @@ std::string HudLine(const std::string& name, const PictureState::Set& set) {
   return line.str();
 }
 
+PictureState::Set CaptureSet(const Tracker& tracker, const EstimateRecord& record, double t,
+                             const HandModel& hand) {
+  const Filter& f = tracker.filter();
+  PictureState::Set set;
+  set.record = record;
+  set.pose_covariance = f.covariance().topLeftCorner<6, 6>();
+  set.contacts = f.trace().contacts;
+  set.visual = f.trace().visual;
+  const TrackerStats stats = tracker.stats();
+  if (stats.relocalizations > 0 && stats.last_relocalization_t <= t &&
+      t - stats.last_relocalization_t <= 1.0)
+    set.found_again = stats.last_relocalized;
+  if (set.record.health.state != HealthState::kOk)
+    set.health = HealthMessage(set.record.health, hand);
+  return set;
+}
+
+OverlayEstimate OverlayOf(const std::string& name, const Rgb& colour,
+                          const PictureState::Set& set) {
+  OverlayEstimate e{name, colour, set.record.T_PO, set.pose_covariance.topLeftCorner<3, 3>(), false,
+                    {},   {}};
+  for (const FilterTrace::Contact& c : set.contacts)
+    e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
+  for (const FilterTrace::Visual& v : set.visual)
+    e.features.push_back({v.measured, v.predicted, !v.gated});
+  return e;
+}
+
 FrameComposer::FrameComposer(const SessionPlayer& player)
     : p_(player), query_(player.models().hand, player.models().object) {
   hand_meshes_ = UploadHand(renderer_, p_.models().hand);
@@ -77,21 +105,8 @@ PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, do
     st.camera = p.last_frame() == camera_frame && !p.last_image().empty()
                     ? p.last_image()
                     : p.session().LoadImage(camera_frame);
-  for (std::size_t i = 0; i < p.sets().size(); ++i) {
-    const Filter& f = p.tracker(i).filter();
-    PictureState::Set set;
-    set.record = p.last(i);
-    set.pose_covariance = f.covariance().topLeftCorner<6, 6>();
-    set.contacts = f.trace().contacts;
-    set.visual = f.trace().visual;
-    const TrackerStats stats = p.tracker(i).stats();
-    if (stats.relocalizations > 0 && stats.last_relocalization_t <= t &&
-        t - stats.last_relocalization_t <= 1.0)
-      set.found_again = stats.last_relocalized;
-    if (set.record.health.state != HealthState::kOk)
-      set.health = HealthMessage(set.record.health, p.models().hand);
-    st.sets.push_back(std::move(set));
-  }
+  for (std::size_t i = 0; i < p.sets().size(); ++i)
+    st.sets.push_back(CaptureSet(p.tracker(i), p.last(i), t, p.models().hand));
   const std::size_t last = p.sets().size() - 1;
   st.link_poses = p.tracker(last).filter().kinematics().link_poses();
   if (camera_frame >= 0 && p.sets()[last].features) {
@@ -110,19 +125,7 @@ void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const
         {"truth", kColourTruth, s.GroundTruthAt(st.t), Mat3::Zero(), true, {}, {}});
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const PictureState::Set& set = st.sets[i];
-    const EstimateRecord& r = set.record;
-    OverlayEstimate e{p_.sets()[i].name,
-                      p_.sets()[i].colour,
-                      r.T_PO,
-                      set.pose_covariance.topLeftCorner<3, 3>(),
-                      false,
-                      {},
-                      {}};
-    for (const FilterTrace::Contact& c : set.contacts)
-      e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
-    for (const FilterTrace::Visual& v : set.visual)
-      e.features.push_back({v.measured, v.predicted, !v.gated});
-    of->estimates.push_back(e);
+    of->estimates.push_back(OverlayOf(p_.sets()[i].name, p_.sets()[i].colour, set));
     of->hud.push_back(HudLine(p_.sets()[i].name, set));
   }
 }

@@ -182,10 +182,7 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
   r.t = t;
   r.step_time_us = us;
   r.events.clear();
-  r.contacts = static_cast<int>(tracker.trace().contacts.size());
-  r.constraints = tracker.trace().num_constraints;
-  r.penetration = tracker.trace().penetration;
-  r.unexplained_torque = tracker.trace().unexplained_torque;
+  RecordContacts(tracker.trace(), r);
   r.visual_ms = -1.0;
   r.visual_used = 0;
   // Camera frames captured by this sample.
@@ -202,16 +199,8 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
       r.visual_mahalanobis = v.mean_mahalanobis;
     }
   }
-  r.T_PO = tracker.T_PO();
-  const auto P = tracker.filter().covariance();
-  r.sigma_position = P.diagonal().head<3>().cwiseSqrt();
-  r.sigma_orientation = P.diagonal().segment<3>(3).cwiseSqrt();
-  r.biases = tracker.biases();
-  r.gated = tracker.trace().num_gated;  // contacts and visual features of this sample
-  r.slipping = tracker.trace().slipping;
-  r.memory = tracker.visual_memory();
-  r.health = tracker.health();
-  r.press = tracker.press_evidence();
+  RecordTrackerState(tracker, r);
+  const auto& P = tracker.filter().covariance();
   tracker.TakeEvents(r.events);
   if (TruthCovers(t))
     CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);

@@ -87,7 +87,7 @@ def main(inhand, node_bin, work):
         wait_for(lambda: rosgraph.Master("/probe").is_online(), 30, "rosmaster")
         import rospy
         from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped
-        from sensor_msgs.msg import CameraInfo, CompressedImage, JointState
+        from sensor_msgs.msg import CameraInfo, CompressedImage, Image, JointState
         from std_msgs.msg import String
         from tf2_msgs.msg import TFMessage
         rospy.init_node("player", anonymous=True, disable_signals=True)
@@ -133,11 +133,11 @@ def main(inhand, node_bin, work):
                     "__name:=inhand_" + tag]
             # Run 1 gives the start as numbers, run 2 as a TF frame (static, published first).
             args += ["--deterministic", "--start", start_arg] if deterministic else \
-                ["--start-frame", "object_guess"]
+                ["--start-frame", "object_guess", "--annotated-rate", "2"]
             log = open(os.path.join(work, "node_%s.log" % tag), "w")
             node = subprocess.Popen(args, env=env, stdout=log, stderr=subprocess.STDOUT)
             received = {s: {} for s in sets}
-            health, tf_children = [], set()
+            health, tf_children, annotated = [], set(), []
             lock = threading.Lock()
 
             def on_pose(set_name):
@@ -160,6 +160,9 @@ def main(inhand, node_bin, work):
                                       lambda m: health.append(json.loads(m.data)))
                      for s in sets]
             subs.append(rospy.Subscriber("/tf", TFMessage, on_tf, queue_size=10000))
+            if not deterministic:
+                subs.append(rospy.Subscriber(base + "/annotated", Image,
+                                             lambda m: annotated.append(m), queue_size=100))
             pub_js = rospy.Publisher("/joint_states", JointState, queue_size=10000,
                                      tcp_nodelay=True)
             pub_tf = rospy.Publisher("/tf", TFMessage, queue_size=1000)
@@ -234,7 +237,7 @@ def main(inhand, node_bin, work):
             if node.returncode != 0:
                 raise SystemExit("FAIL: node exit %d: %s" % (node.returncode, open(
                     os.path.join(work, "node_%s.log" % tag)).read()[-3000:]))
-            return received, sent, health, tf_children, json.load(open(stats_path))
+            return received, sent, health, tf_children, annotated, json.load(open(stats_path))
 
         # Bad input: one line naming what is missing or wrong, exit 2, nothing published.
         for extra, expected in (([], "--start"), (["--start", "0 0 0 1 0 0 0", "--sets", "jx"],
@@ -249,7 +252,7 @@ def main(inhand, node_bin, work):
                 print("bad input %s: %s" % (extra, r.stderr.strip()))
 
         # Run 1: against the replay.
-        received, _, health, tf_children, stats = run(True, timeline)
+        received, _, health, tf_children, _, stats = run(True, timeline)
         _, est = rows(os.path.join(replay, "estimates.csv"))
         # A pose is published when its joint state arrives; an image captured at that same stamp
         # comes after it and counts from the next joint state on, whereas replay's row at that
@@ -288,7 +291,36 @@ def main(inhand, node_bin, work):
         # is run 1's.
         first_stamp = ns(joints[0][0])
         first_1 = {s: received[s][first_stamp][0] for s in sets}
-        received, sent, _, _, stats = run(False, timeline_30hz)
+        received, sent, _, _, annotated, stats = run(False, timeline_30hz)
+        # The annotated image: ~2 Hz over the session, at a camera image's stamp, the size of the
+        # camera, both sets' outlines in their colours (jt blue, jta orange).
+        duration = (ns(joints[-1][0]) - ns(joints[0][0])) * 1e-9
+        camera_stamps = {stamp for stamp, _, _ in camera_30hz}
+        print("annotated images: %d received, %d published over %.1f s" %
+              (len(annotated), stats.get("annotated_images", -1), duration))
+        if not 2 * duration - 3 <= len(annotated) <= 2 * duration + 1:
+            failures.append("%d annotated images in %.1f s at 2 Hz" % (len(annotated), duration))
+        for m in annotated:
+            if (m.encoding, m.width, m.height, m.step) != ("rgb8", cam["width"], cam["height"],
+                                                           3 * cam["width"]) or \
+                    m.header.stamp.to_nsec() not in camera_stamps or \
+                    len(m.data) != 3 * cam["width"] * cam["height"]:
+                failures.append("annotated image %s %dx%d at %d" % (
+                    m.encoding, m.width, m.height, m.header.stamp.to_nsec()))
+                break
+        if annotated:
+            last = annotated[-1]
+            with open(os.path.join(work, "annotated.ppm"), "wb") as f:
+                f.write(b"P6 %d %d 255\n" % (last.width, last.height) + bytes(last.data))
+            pixels = bytes(last.data)
+            counts = {name: sum(1 for i in range(0, len(pixels), 3)
+                                if pixels[i:i + 3] == bytes(rgb))
+                      for name, rgb in (("jt", (31, 119, 220)), ("jta", (255, 140, 0)))}
+            print("last annotated image: pixels in jt's colour %d, in jta's %d" %
+                  (counts["jt"], counts["jta"]))
+            for name, n in counts.items():
+                if n < 100:
+                    failures.append("the annotated image has %d pixels of %s's outline" % (n, name))
         for s in sets:
             d = max(abs(a - b) for a, b in zip(received[s][first_stamp][0], first_1[s]))
             print("%s: the first pose started from the TF frame is %.3g m from run 1's" % (s, d))

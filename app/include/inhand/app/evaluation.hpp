@@ -52,6 +52,13 @@ constexpr double kNeesSettle = 0.1;      // [s]
 // Fills the errors against the true pose and the NEES of the pose against its covariance P
 // (6×6, the filter's error convention p = p̂ + δp, R = Exp(δθ) R̂).
 void CompareWithTruth(const Transform& truth, const Mat6& P, EstimateRecord& r);
+// The contact figures of a joint sample's trace (contacts, constraints, penetration, unexplained
+// torque), as the step found them before any image fused at that sample.
+void RecordContacts(const FilterTrace& trace, EstimateRecord& r);
+// What `tracker` says after its last sample and its images, into r: pose, σ, biases, gated
+// measurements, slipping, its visual memory, health and pressing evidence. Events and the visual
+// step are the caller's.
+void RecordTrackerState(const Tracker& tracker, EstimateRecord& r);
 // The record with its comparison fields reset (no truth at its time).
 EstimateRecord WithoutTruth(EstimateRecord r);
 

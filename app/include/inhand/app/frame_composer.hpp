@@ -41,6 +41,13 @@ struct PictureState {
 std::string HudLine(const std::string& name, const PictureState::Set& set);
 // √ of the largest eigenvalue of a covariance block.
 double LargestSigma(const Mat3& covariance);
+// A set's part of the pictures at time t: `record` (what the set reported after its last sample)
+// with its tracker's covariance, contacts, feature matches, a relocalization of the last second
+// and the health in words.
+PictureState::Set CaptureSet(const Tracker& tracker, const EstimateRecord& record, double t,
+                             const HandModel& hand);
+// A set's estimate as the camera overlay draws it: silhouette, position σ, contacts, matches.
+OverlayEstimate OverlayOf(const std::string& name, const Rgb& colour, const PictureState::Set& set);
 
 class FrameComposer {
  public:
