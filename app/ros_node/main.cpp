@@ -263,6 +263,7 @@ class Node {
   struct UsedImage {
     Header header;
     Image8 image;
+    LiveImage camera;  // its camera pose and intrinsics, as the trackers were given them
   };
   std::optional<UsedImage> to_annotate_;
   std::int64_t last_annotated_ns_ = 0;
@@ -275,20 +276,19 @@ class Node {
     if (last_annotated_ns_ != 0 && (header.stamp_ns - last_annotated_ns_) * 1e-9 < period - 1e-6)
       return;
     last_annotated_ns_ = header.stamp_ns;
-    to_annotate_ = UsedImage{header, image};
+    to_annotate_ = UsedImage{header, image, *live_.last_image()};
   }
 
   // After a joint state: the picture of the image kept, with every set's estimate now.
   void Annotate() {
     if (!to_annotate_) return;
-    const LiveImage& used = *live_.last_image();
     AnnotationRequest r;
     r.stamp_ns = to_annotate_->header.stamp_ns;
     r.frame_id = to_annotate_->header.frame_id;
     r.camera = std::move(to_annotate_->image);
+    r.T_PC = to_annotate_->camera.T_PC;
+    r.K = to_annotate_->camera.K;
     to_annotate_.reset();
-    r.T_PC = used.T_PC;
-    r.K = used.K;
     for (std::size_t i = 0; i < live_.sets().size(); ++i) {
       const Tracker& tracker = live_.tracker(i);
       app::EstimateRecord record;

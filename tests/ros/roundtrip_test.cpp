@@ -38,6 +38,21 @@ double McapSizeBound(const Session& s) {
   return 1.15 * ImageBytes(s) + 2e6 * (s.t(s.num_samples() - 1) - s.t(0)) / 60.0;
 }
 
+// replay --mcap of the session at `path` (loaded as s) with `sets` into `out`; the file within
+// McapSizeBound.
+void ExportWithinBound(const std::string& path, const Session& s, const std::string& sets,
+                       const std::string& out) {
+  ASSERT_EQ(test::RunInhand("replay " + path + " --no-video --mcap --modalities " + sets +
+                            " --out " + out)
+                .exit_code,
+            0);
+  const double size = static_cast<double>(fs::file_size(out + "/replay.mcap"));
+  EXPECT_LE(size, McapSizeBound(s));
+  std::printf("replay.mcap of %.0f s: %.1f MB for %.1f MB of images (bound %.1f MB)\n",
+              s.t(s.num_samples() - 1) - s.t(0), size / 1e6, ImageBytes(s) / 1e6,
+              McapSizeBound(s) / 1e6);
+}
+
 int Shell(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
 
 // The simulated session made representable in a recording: times on whole nanoseconds (ROS
@@ -144,14 +159,7 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
           .exit_code,
       0);
   const Session s = Session::Load(dir / "sim");
-  ASSERT_EQ(test::RunInhand("replay " + (dir / "sim") +
-                            " --no-video --mcap --modalities j,jta --out " + (dir / "r"))
-                .exit_code,
-            0);
-  const double size = static_cast<double>(fs::file_size(dir / "r/replay.mcap"));
-  EXPECT_LE(size, McapSizeBound(s));
-  std::printf("replay.mcap: %.1f MB for %.1f MB of images (bound %.1f MB)\n", size / 1e6,
-              ImageBytes(s) / 1e6, McapSizeBound(s) / 1e6);
+  ASSERT_NO_FATAL_FAILURE(ExportWithinBound(dir / "sim", s, "j,jta", dir / "r"));
   const std::string json_path = dir / "check.json";
   ASSERT_EQ(std::system(
                 ("node " + tools + "/check_mcap.mjs " + (dir / "r/replay.mcap") + " > " + json_path)
@@ -298,14 +306,7 @@ TEST(Export, LongRecordingStaysSmallAndSeeksThroughItsIndex) {
             0);
   const Session s = Session::Load(dir / "long");
   EXPECT_NEAR(s.t(s.num_samples() - 1) - s.t(0), 120.0, 1e-6);
-  ASSERT_EQ(test::RunInhand("replay " + (dir / "long") +
-                            " --no-video --mcap --modalities jt --out " + (dir / "r"))
-                .exit_code,
-            0);
-  const double size = static_cast<double>(fs::file_size(dir / "r/replay.mcap"));
-  EXPECT_LE(size, McapSizeBound(s));
-  std::printf("2-minute replay.mcap: %.1f MB for %.1f MB of images (bound %.1f MB)\n", size / 1e6,
-              ImageBytes(s) / 1e6, McapSizeBound(s) / 1e6);
+  ASSERT_NO_FATAL_FAILURE(ExportWithinBound(dir / "long", s, "jt", dir / "r"));
   const std::string indexed_path = dir / "indexed.json";
   ASSERT_EQ(std::system(("node " + tools + "/check_mcap_indexed.mjs " + (dir / "r/replay.mcap") +
                          " 11 5 > " + indexed_path)
