@@ -80,6 +80,7 @@ class LiveTracking {
   const std::vector<std::string>& sets() const { return options_.sets; }
   const Tracker& tracker(std::size_t i) const { return *trackers_[i]; }
   std::string palm_frame() const { return palm_; }
+  const HandModel& hand() const { return hand_; }
   const std::optional<LiveImage>& last_image() const { return last_image_; }
   // The time [s] since the origin of a stamp.
   double T(std::int64_t stamp_ns) const;

@@ -137,7 +137,7 @@ std::string CameraInfoTopic(const NodeOptions& o) {
 class Node {
  public:
   Node(const NodeOptions& o, const HandModel& hand, const ObjectModel& object)
-      : options_(o), hand_(hand), live_(hand, object, LiveOptionsOf(o)), pnh_("~") {
+      : options_(o), live_(hand, object, LiveOptionsOf(o)), pnh_("~") {
     if (!(o.annotated_rate >= 0.0 && o.annotated_rate <= 30.0))
       throw InputError("--annotated-rate: " + std::to_string(o.annotated_rate) +
                        ", expected [0, 30] Hz (0: no annotated image)");
@@ -237,7 +237,6 @@ class Node {
 
  private:
   NodeOptions options_;
-  const HandModel& hand_;
   LiveTracking live_;
   ::ros::NodeHandle nh_, pnh_, image_nh_;
   ::ros::CallbackQueue image_queue_;
@@ -295,7 +294,7 @@ class Node {
       app::RecordContacts(tracker.trace(), record);
       app::RecordTrackerState(tracker, record);
       r.names.push_back(live_.sets()[i]);
-      r.sets.push_back(app::CaptureSet(tracker, record, live_.T(r.stamp_ns), hand_));
+      r.sets.push_back(app::CaptureSet(tracker, record, live_.T(r.stamp_ns), live_.hand()));
     }
     annotator_->Request(std::move(r));
   }

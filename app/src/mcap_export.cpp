@@ -32,14 +32,17 @@ class Cdr {
     bytes_.append(b, sizeof(T));
     return *this;
   }
+  Cdr& Length(std::size_t n) {  // of a sequence (elements) or a string (bytes with the NUL)
+    return Put<std::uint32_t>(static_cast<std::uint32_t>(n));
+  }
   Cdr& String(const std::string& s) {
-    Put<std::uint32_t>(static_cast<std::uint32_t>(s.size() + 1));
+    Length(s.size() + 1);
     bytes_ += s;
     bytes_.push_back('\0');
     return *this;
   }
   Cdr& Bytes(const std::string& b) {  // uint8[]
-    Put<std::uint32_t>(static_cast<std::uint32_t>(b.size()));
+    Length(b.size());
     bytes_ += b;
     return *this;
   }
@@ -228,7 +231,7 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
   const std::uint64_t log = LogTime(t);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   Cdr state;
-  state.Time(t).Put<std::uint32_t>(static_cast<std::uint32_t>(p_.sets().size()));
+  state.Time(t).Length(p_.sets().size());
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const EstimateRecord& r = records[i];
     const std::string& name = p_.sets()[i].name;
@@ -351,7 +354,7 @@ void McapExport::AddFrame(int frame, double t) {
   }
   const Rgb white{255, 255, 255};
   Cdr annotations;
-  annotations.Put<std::uint32_t>(static_cast<std::uint32_t>(origins.size()));
+  annotations.Length(origins.size());
   for (const auto& [o, i] : origins)
     annotations.Time(f.t)
         .Point2(o)
@@ -359,17 +362,16 @@ void McapExport::AddFrame(int frame, double t) {
         .Put<double>(2.0)
         .Color(p_.sets()[i].colour, 0.0)
         .Color(p_.sets()[i].colour);
-  annotations.Put<std::uint32_t>(static_cast<std::uint32_t>(points.size()));
+  annotations.Length(points.size());
   for (const Points& p : points) {
-    annotations.Time(f.t).Put<std::uint8_t>(p.type).Put<std::uint32_t>(
-        static_cast<std::uint32_t>(p.points.size()));
+    annotations.Time(f.t).Put<std::uint8_t>(p.type).Length(p.points.size());
     for (const Vec2& u : p.points) annotations.Point2(u);
     annotations.Color(p.colour)
-        .Put<std::uint32_t>(0)  // outline_colors
+        .Length(0)  // outline_colors
         .Color(p.colour, 0.0)
         .Put<double>(p.thickness);
   }
-  annotations.Put<std::uint32_t>(static_cast<std::uint32_t>(origins.size()));
+  annotations.Length(origins.size());
   for (const auto& [o, i] : origins)
     annotations.Time(f.t)
         .Point2(o + Vec2(8, -8))
@@ -382,8 +384,8 @@ void McapExport::AddFrame(int frame, double t) {
   // Contacts and forces in 3-D, an entity per set: a 4 mm sphere per contact, an arrow per force
   // (1 cm per newton).
   Cdr scene;
-  scene.Put<std::uint32_t>(0);  // deletions
-  scene.Put<std::uint32_t>(static_cast<std::uint32_t>(p_.sets().size()));
+  scene.Length(0);  // deletions
+  scene.Length(p_.sets().size());
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const Rgb& c = p_.sets()[i].colour;
     const auto& contacts = p_.tracker(i).filter().trace().contacts;
@@ -391,12 +393,12 @@ void McapExport::AddFrame(int frame, double t) {
         .String("palm")
         .String("contacts_" + p_.sets()[i].name)
         .Put<std::int32_t>(0)
-        .Put<std::uint32_t>(0)   // lifetime 0: until replaced
-        .Put<std::uint8_t>(0)    // frame_locked
-        .Put<std::uint32_t>(0);  // metadata
+        .Put<std::uint32_t>(0)  // lifetime 0: until replaced
+        .Put<std::uint8_t>(0)   // frame_locked
+        .Length(0);             // metadata
     std::uint32_t arrows = 0;
     for (const auto& contact : contacts) arrows += contact.force_P.norm() > 1e-6;
-    scene.Put<std::uint32_t>(arrows);
+    scene.Length(arrows);
     for (const auto& contact : contacts) {
       const double n = contact.force_P.norm();
       if (n <= 1e-6) continue;
@@ -409,8 +411,8 @@ void McapExport::AddFrame(int frame, double t) {
           .Put<double>(0.003)
           .Color(c);
     }
-    scene.Put<std::uint32_t>(0);  // cubes
-    scene.Put<std::uint32_t>(static_cast<std::uint32_t>(contacts.size()));
+    scene.Length(0);  // cubes
+    scene.Length(contacts.size());
     for (const auto& contact : contacts)
       scene.Pose(MakeTransform(contact.c_o_P, Quat::Identity()))
           .Put<double>(0.004)
@@ -418,7 +420,7 @@ void McapExport::AddFrame(int frame, double t) {
           .Put<double>(0.004)
           .Color(c);
     for (int empty = 0; empty < 5; ++empty)  // cylinders, lines, triangles, texts, models
-      scene.Put<std::uint32_t>(0);
+      scene.Length(0);
   }
   w_->Write(scene_, log, scene.bytes());
 }

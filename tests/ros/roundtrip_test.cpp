@@ -53,6 +53,18 @@ void ExportWithinBound(const std::string& path, const Session& s, const std::str
               McapSizeBound(s) / 1e6);
 }
 
+// A CSV file's last line, and a line's comma-separated cells (no quoted commas before the last
+// cell used).
+std::string LastLine(const std::string& text) {
+  return text.substr(text.rfind('\n', text.size() - 2) + 1);
+}
+std::vector<std::string> Cells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::istringstream in(line);
+  for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+  return cells;
+}
+
 int Shell(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
 
 // The simulated session made representable in a recording: times on whole nanoseconds (ROS
@@ -210,8 +222,7 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   std::getline(estimates, header);
   std::getline(estimates, row);  // t, set (j first), px, py, pz, ...
   std::vector<double> values;
-  std::istringstream cells(row);
-  for (std::string cell; std::getline(cells, cell, ',');)
+  for (const std::string& cell : Cells(row))
     values.push_back(cell == "j" ? 0.0 : std::strtod(cell.c_str(), nullptr));
   ASSERT_GE(values.size(), 5u);
   const nlohmann::json& pose = j.at("first").at("/inhand/pose/j");
@@ -229,8 +240,7 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   EXPECT_EQ(count("/inhand/events"), events);
   EXPECT_EQ(count("/inhand/log"), events);
   // The last event is events.csv's last row; the log line says the same.
-  const std::string last_row = events_csv.substr(events_csv.rfind('\n', events_csv.size() - 2) +
-                                                 1);  // t,set,kind,subject,value,...
+  const std::string last_row = LastLine(events_csv);  // t,set,kind,subject,value,...
   const nlohmann::json& event = j.at("last").at("/inhand/events");
   const std::string event_prefix = event.at("set").get<std::string>() + "," +
                                    event.at("kind").get<std::string>() + "," +
@@ -240,11 +250,8 @@ TEST(Export, ReplayMcapReadsBackWithTheOfficialReader) {
   EXPECT_EQ(j.at("last").at("/inhand/log").at("name"),
             "inhand/" + event.at("set").get<std::string>());
   // The last state per set is estimates.csv's last row of that set (jta, last in the file).
-  const std::string estimates_csv = test::ReadFile(dir / "r/estimates.csv");
-  std::vector<std::string> cells_jta;
-  std::istringstream last_estimate(
-      estimates_csv.substr(estimates_csv.rfind('\n', estimates_csv.size() - 2) + 1));
-  for (std::string cell; std::getline(last_estimate, cell, ',');) cells_jta.push_back(cell);
+  const std::vector<std::string> cells_jta =
+      Cells(LastLine(test::ReadFile(dir / "r/estimates.csv")));
   ASSERT_GT(cells_jta.size(), 21u);
   ASSERT_EQ(cells_jta[1], "jta");
   const nlohmann::json& state = j.at("last").at("/inhand/errors").at("sets");
