@@ -17,6 +17,8 @@ PACKAGES=(
   librosbag-storage-dev libsensor-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev libnav-msgs-dev
   librcpputils-dev librcutils-dev libboost-filesystem-dev libboost-regex-dev
   libzstd-dev liblz4-dev libsqlite3-dev libdeflate-dev
+  # Image files: PNG and JPEG through their own libraries (not OpenCV's imgcodecs).
+  libpng-dev libjpeg62-turbo-dev
   # The live ROS 1 node (roscpp), and the ROS core and rospy its test runs it against.
   libroscpp-dev libstd-msgs-dev python3-rosmaster python3-rospy
   # The official writers the importer is tested against: Debian's rosbag (Python).

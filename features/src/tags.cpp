@@ -16,9 +16,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "inhand/core/error.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand {
 
@@ -89,11 +90,11 @@ Image8 ReadGreyImage(const std::string& path) {
     pjpeg_destroy(jpeg);
     return out;
   }
-  const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (grey.empty()) throw InputError(path + ": not a readable image");
-  Image8 out(grey.cols, grey.rows, 1);
-  for (int y = 0; y < grey.rows; ++y)
-    std::copy_n(grey.ptr<std::uint8_t>(y), grey.cols, out.pixel(0, y));
+  Image8 rgb = ReadImage(path);
+  Image8 out(rgb.width, rgb.height, 1);
+  const cv::Mat in(rgb.height, rgb.width, CV_8UC3, rgb.data.data());
+  cv::Mat grey(out.height, out.width, CV_8UC1, out.data.data());
+  cv::cvtColor(in, grey, cv::COLOR_RGB2GRAY);
   return out;
 }
 

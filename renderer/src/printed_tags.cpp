@@ -8,9 +8,10 @@
 #include <apriltag/tagCircle21h7.h>
 #include <apriltag/tagStandard41h12.h>
 
-#include <opencv2/imgcodecs.hpp>
+#include <algorithm>
 
 #include "inhand/core/error.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand {
 namespace {
@@ -47,15 +48,12 @@ TriangleMesh MakeTagMesh(const TagPlacement& tag) {
   const double border_modules = static_cast<double>(fam.family->width_at_border);
   fam.destroy(fam.family);
   constexpr int kScale = 24;  // nearest-neighbour upscaling keeps the edges sharp when sampled
-  cv::Mat big(w * kScale, w * kScale, CV_8UC3);
-  for (int y = 0; y < big.rows; ++y)
-    for (int x = 0; x < big.cols; ++x) {
-      const std::uint8_t v = im->buf[(y / kScale) * im->stride + x / kScale];
-      big.at<cv::Vec3b>(y, x) = cv::Vec3b(v, v, v);
-    }
+  Image8 big(w * kScale, w * kScale, 3);
+  for (int y = 0; y < big.height; ++y)
+    for (int x = 0; x < big.width; ++x)
+      std::fill_n(big.pixel(x, y), 3, im->buf[(y / kScale) * im->stride + x / kScale]);
   image_u8_destroy(im);
-  std::vector<std::uint8_t> png;
-  cv::imencode(".png", big, png);
+  std::vector<std::uint8_t> png = EncodePng(big);
   const double half = 0.5 * tag.size * w / border_modules;
   TriangleMesh m;
   m.vertices = {Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0),

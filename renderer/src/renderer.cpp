@@ -12,10 +12,8 @@
 #include <stdexcept>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "inhand/core/error.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand {
 
@@ -162,19 +160,16 @@ struct Renderer::Impl {
       key = "blob:" + std::to_string(h) + ":" + std::to_string(m.texture_blob.size());
     }
     if (auto it = textures.find(key); it != textures.end()) return it->second;
-    cv::Mat bgr = !m.texture_file.empty() ? cv::imread(m.texture_file, cv::IMREAD_COLOR)
-                                          : cv::imdecode(m.texture_blob, cv::IMREAD_COLOR);
-    if (bgr.empty())
-      throw InputError((m.texture_file.empty() ? std::string("embedded texture") : m.texture_file) +
-                       ": unreadable texture image");
-    cv::Mat rgb;
-    cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+    const Image8 rgb = !m.texture_file.empty()
+                           ? ReadImage(m.texture_file)
+                           : DecodeImage(m.texture_blob.data(), m.texture_blob.size(),
+                                         "embedded texture of material '" + m.name + "'");
     GLuint tex;
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE,
-                 rgb.data);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.width, rgb.height, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                 rgb.data.data());
     glGenerateMipmap(GL_TEXTURE_2D);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);

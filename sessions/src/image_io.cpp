@@ -1,15 +1,21 @@
 #include "inhand/sessions/image_io.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
+// PNG through libpng and JPEG through libjpeg(-turbo), called directly: OpenCV's imgcodecs would
+// do the same, but linking it maps GDAL, poppler, HDF5 and some seventy other libraries into
+// every process (0.17 s of start-up). Errors come back through setjmp/longjmp, C-style, inside
+// functions whose locals are plain data; the callers turn them into InputError naming the file.
+#include <jpeglib.h>
+#include <png.h>
 
 #include <algorithm>
+#include <cctype>
+#include <csetjmp>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
+#include <iterator>
 
 #include "inhand/core/error.hpp"
 
@@ -17,107 +23,283 @@ namespace inhand {
 
 namespace {
 
-// libpng and libjpeg print their own complaints ("libpng error: Read Error") to stderr before
-// OpenCV returns an empty image: the user gets ours, naming the file, instead.
-class QuietStderr {
- public:
-  QuietStderr() : lock_(Mutex()) {
-    std::fflush(stderr);
-    saved_ = ::dup(STDERR_FILENO);
-    const int null_fd = ::open("/dev/null", O_WRONLY);
-    if (saved_ >= 0 && null_fd >= 0) ::dup2(null_fd, STDERR_FILENO);
-    if (null_fd >= 0) ::close(null_fd);
-  }
-  ~QuietStderr() {
-    std::fflush(stderr);
-    if (saved_ >= 0) ::dup2(saved_, STDERR_FILENO), ::close(saved_);
-  }
-  QuietStderr(const QuietStderr&) = delete;
-  QuietStderr& operator=(const QuietStderr&) = delete;
-
- private:
-  static std::mutex& Mutex() {
-    static std::mutex m;
-    return m;
-  }
-  std::lock_guard<std::mutex> lock_;
-  int saved_ = -1;
-};
-
 constexpr double kMaxPixels = 1 << 28;  // 268 megapixels
 
-// A PNG's header says its size: refuse an absurd one before decoding (a 60000 x 60000 header
-// made OpenCV assert without naming the file).
-void CheckPngHeader(const unsigned char* head, std::size_t n, const std::string& what) {
-  static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (n < 24 || !std::equal(kPng, kPng + 8, head)) return;
-  const auto be32 = [&](int at) {
-    return (double(head[at]) * 256 + head[at + 1]) * 65536 + double(head[at + 2]) * 256 +
-           head[at + 3];
-  };
-  const double w = be32(16), h = be32(20);
+std::string Dimensions(double w, double h) {
+  return std::to_string(static_cast<long long>(w)) + "x" +
+         std::to_string(static_cast<long long>(h));
+}
+
+// Any image header's size: refuse an absurd one before allocating (a 60000 x 60000 PNG header).
+void CheckSize(double w, double h, const char* format, const std::string& what) {
   if (w < 1 || h < 1 || w * h > kMaxPixels)
-    throw InputError(what + ": the PNG header says " + std::to_string(static_cast<long long>(w)) +
-                     "x" + std::to_string(static_cast<long long>(h)) +
+    throw InputError(what + ": the " + format + " header says " + Dimensions(w, h) +
                      " px; expected 1 to 268 million pixels");
 }
 
-// An OpenCV decode (BGR) as an RGB Image8, its failures as InputError naming `what`.
-template <class Decode>
-Image8 DecodedRgb(const std::string& what, Decode decode) {
-  cv::Mat bgr;
-  try {
-    bgr = decode();
-  } catch (const cv::Exception& e) {
-    throw InputError(what + ": not a readable image (" + e.err + ")");
+// ---- PNG ------------------------------------------------------------------------------------
+
+struct PngSource {
+  const std::uint8_t* data;
+  std::size_t size;
+  std::size_t pos;
+  char message[256];
+};
+
+void PngError(png_structp png, png_const_charp msg) {
+  auto* src = static_cast<PngSource*>(png_get_error_ptr(png));
+  std::snprintf(src->message, sizeof(src->message), "%s", msg);
+  png_longjmp(png, 1);
+}
+void PngWarning(png_structp, png_const_charp) {}
+
+void PngRead(png_structp png, png_bytep out, png_size_t n) {
+  auto* src = static_cast<PngSource*>(png_get_io_ptr(png));
+  if (n > src->size - src->pos) png_error(png, "truncated");
+  std::memcpy(out, src->data + src->pos, n);
+  src->pos += n;
+}
+
+// 8-bit RGB whatever the file holds, as OpenCV's IMREAD_COLOR gives it: palettes and grey
+// expanded, 16 bits cut to their high byte, alpha dropped (not composited).
+bool DecodePng(PngSource* src, Image8* out) {
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, src, PngError, PngWarning);
+  if (png == nullptr) return false;
+  png_infop info = png_create_info_struct(png);
+  std::vector<png_bytep> rows;
+  if (info == nullptr || setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    return false;
   }
-  if (bgr.empty())
-    throw InputError(what + ": not a readable image (unknown format, truncated or corrupt)");
-  Image8 out(bgr.cols, bgr.rows, 3);
-  cv::Mat rgb(bgr.rows, bgr.cols, CV_8UC3, out.data.data());
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  return out;
+  png_set_read_fn(png, src, PngRead);
+  png_read_info(png, info);
+  const double w = png_get_image_width(png, info), h = png_get_image_height(png, info);
+  if (w < 1 || h < 1 || w * h > kMaxPixels) png_error(png, "image size out of range");
+  const int colour = png_get_color_type(png, info);
+  const int depth = png_get_bit_depth(png, info);
+  if (colour == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+  if ((colour & PNG_COLOR_MASK_COLOR) == 0 && depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+  if (depth == 16) png_set_strip_16(png);
+  if ((colour & PNG_COLOR_MASK_ALPHA) != 0) png_set_strip_alpha(png);
+  if ((colour & PNG_COLOR_MASK_COLOR) == 0) png_set_gray_to_rgb(png);
+  png_set_interlace_handling(png);
+  png_read_update_info(png, info);
+  if (png_get_channels(png, info) != 3 || png_get_rowbytes(png, info) != 3 * std::size_t(w))
+    png_error(png, "unsupported pixel layout");
+  *out = Image8(static_cast<int>(w), static_cast<int>(h), 3);
+  rows.resize(static_cast<std::size_t>(h));
+  for (int y = 0; y < out->height; ++y) rows[static_cast<std::size_t>(y)] = out->pixel(0, y);
+  png_read_image(png, rows.data());
+  png_read_end(png, nullptr);
+  png_destroy_read_struct(&png, &info, nullptr);
+  return true;
+}
+
+struct PngSink {
+  std::vector<std::uint8_t>* bytes;
+  char message[256];
+};
+
+void PngWrite(png_structp png, png_bytep data, png_size_t n) {
+  auto* sink = static_cast<PngSink*>(png_get_io_ptr(png));
+  sink->bytes->insert(sink->bytes->end(), data, data + n);
+}
+void PngFlush(png_structp) {}
+void PngSinkError(png_structp png, png_const_charp msg) {
+  auto* sink = static_cast<PngSink*>(png_get_error_ptr(png));
+  std::snprintf(sink->message, sizeof(sink->message), "%s", msg);
+  png_longjmp(png, 1);
+}
+
+// Grey, RGB or RGBA as PNG, with the settings OpenCV's writer uses by default (zlib level 1,
+// run-length strategy): saved pictures stay as small as before.
+bool EncodePngLibpng(const Image8& image, PngSink* sink) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, sink, PngSinkError, PngWarning);
+  if (png == nullptr) return false;
+  png_infop info = png_create_info_struct(png);
+  std::vector<png_bytep> rows(static_cast<std::size_t>(image.height));
+  if (info == nullptr || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    return false;
+  }
+  png_set_write_fn(png, sink, PngWrite, PngFlush);
+  png_set_compression_level(png, 1);
+  png_set_compression_strategy(png, 3);  // Z_RLE
+  const int type = image.channels == 1   ? PNG_COLOR_TYPE_GRAY
+                   : image.channels == 3 ? PNG_COLOR_TYPE_RGB
+                                         : PNG_COLOR_TYPE_RGB_ALPHA;
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image.width),
+               static_cast<png_uint_32>(image.height), 8, type, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  for (int y = 0; y < image.height; ++y)
+    rows[static_cast<std::size_t>(y)] = const_cast<std::uint8_t*>(image.pixel(0, y));
+  png_write_info(png, info);
+  png_write_image(png, rows.data());
+  png_write_end(png, info);
+  png_destroy_write_struct(&png, &info);
+  return true;
+}
+
+// ---- JPEG -----------------------------------------------------------------------------------
+
+struct JpegError {
+  jpeg_error_mgr mgr;
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX];
+};
+
+void JpegExit(j_common_ptr cinfo) {
+  auto* err = reinterpret_cast<JpegError*>(cinfo->err);
+  (*cinfo->err->format_message)(cinfo, err->message);
+  std::longjmp(err->jump, 1);
+}
+void JpegMessage(j_common_ptr) {}
+
+bool DecodeJpeg(const std::uint8_t* data, std::size_t size, Image8* out, JpegError* err,
+                double* header_w, double* header_h) {
+  jpeg_decompress_struct cinfo{};
+  cinfo.err = jpeg_std_error(&err->mgr);
+  err->mgr.error_exit = JpegExit;
+  err->mgr.output_message = JpegMessage;
+  if (setjmp(err->jump)) {
+    jpeg_destroy_decompress(&cinfo);
+    return false;
+  }
+  jpeg_create_decompress(&cinfo);
+  jpeg_mem_src(&cinfo, data, static_cast<unsigned long>(size));
+  jpeg_read_header(&cinfo, TRUE);
+  *header_w = cinfo.image_width;
+  *header_h = cinfo.image_height;
+  if (*header_w < 1 || *header_h < 1 || *header_w * *header_h > kMaxPixels) {
+    jpeg_destroy_decompress(&cinfo);
+    return false;
+  }
+  cinfo.out_color_space = JCS_RGB;
+  jpeg_start_decompress(&cinfo);
+  *out = Image8(static_cast<int>(cinfo.output_width), static_cast<int>(cinfo.output_height), 3);
+  while (cinfo.output_scanline < cinfo.output_height) {
+    JSAMPROW row = out->pixel(0, static_cast<int>(cinfo.output_scanline));
+    jpeg_read_scanlines(&cinfo, &row, 1);
+  }
+  jpeg_finish_decompress(&cinfo);
+  jpeg_destroy_decompress(&cinfo);
+  return true;
+}
+
+bool EncodeJpegInto(const Image8& image, int quality, std::vector<std::uint8_t>* bytes,
+                    JpegError* err) {
+  jpeg_compress_struct cinfo{};
+  cinfo.err = jpeg_std_error(&err->mgr);
+  err->mgr.error_exit = JpegExit;
+  err->mgr.output_message = JpegMessage;
+  unsigned char* buffer = nullptr;
+  unsigned long length = 0;
+  if (setjmp(err->jump)) {
+    jpeg_destroy_compress(&cinfo);
+    std::free(buffer);
+    return false;
+  }
+  jpeg_create_compress(&cinfo);
+  jpeg_mem_dest(&cinfo, &buffer, &length);
+  cinfo.image_width = static_cast<JDIMENSION>(image.width);
+  cinfo.image_height = static_cast<JDIMENSION>(image.height);
+  cinfo.input_components = image.channels;
+  cinfo.in_color_space = image.channels == 1 ? JCS_GRAYSCALE : JCS_RGB;
+  jpeg_set_defaults(&cinfo);
+  jpeg_set_quality(&cinfo, quality, TRUE);
+  jpeg_start_compress(&cinfo, TRUE);
+  while (cinfo.next_scanline < cinfo.image_height) {
+    JSAMPROW row = const_cast<std::uint8_t*>(image.pixel(0, static_cast<int>(cinfo.next_scanline)));
+    jpeg_write_scanlines(&cinfo, &row, 1);
+  }
+  jpeg_finish_compress(&cinfo);
+  bytes->assign(buffer, buffer + length);
+  jpeg_destroy_compress(&cinfo);
+  std::free(buffer);
+  return true;
+}
+
+bool IsPng(const std::uint8_t* data, std::size_t size) {
+  static const std::uint8_t kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  return size >= 8 && std::equal(kPng, kPng + 8, data);
+}
+bool IsJpeg(const std::uint8_t* data, std::size_t size) {
+  return size >= 3 && data[0] == 0xFF && data[1] == 0xD8 && data[2] == 0xFF;
+}
+
+std::string LowerExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
 }
 
 }  // namespace
 
 Image8 ReadImage(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": image file not found");
-  unsigned char head[24] = {};
-  std::ifstream(path, std::ios::binary).read(reinterpret_cast<char*>(head), sizeof(head));
-  CheckPngHeader(head, sizeof(head), path);
-  return DecodedRgb(path, [&] {
-    const QuietStderr quiet;
-    return cv::imread(path, cv::IMREAD_COLOR);
-  });
-}
-
-void WriteImage(const std::string& path, const Image8& image) {
-  const int type = image.channels == 1 ? CV_8UC1 : image.channels == 3 ? CV_8UC3 : CV_8UC4;
-  const cv::Mat in(image.height, image.width, type, const_cast<std::uint8_t*>(image.data.data()));
-  cv::Mat bgr;
-  if (image.channels == 3)
-    cv::cvtColor(in, bgr, cv::COLOR_RGB2BGR);
-  else if (image.channels == 4)
-    cv::cvtColor(in, bgr, cv::COLOR_RGBA2BGRA);
-  else
-    bgr = in;
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, bgr);
-  } catch (const cv::Exception&) {
-    ok = false;
-  }
-  if (!ok) throw InputError(path + ": cannot write image");
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) throw InputError(path + ": cannot read the image file");
+  return DecodeImage(bytes.data(), bytes.size(), path);
 }
 
 Image8 DecodeImage(const std::uint8_t* data, std::size_t size, const std::string& context) {
-  CheckPngHeader(data, size, context);
-  return DecodedRgb(context, [&] {
-    return cv::imdecode(
-        cv::Mat(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data)),
-        cv::IMREAD_COLOR);
-  });
+  Image8 out;
+  if (IsPng(data, size)) {
+    // The header's size is checked before libpng sees it (and its CRC): the message names it.
+    const auto be32 = [&](std::size_t at) {
+      return (double(data[at]) * 256 + data[at + 1]) * 65536 + double(data[at + 2]) * 256 +
+             data[at + 3];
+    };
+    if (size >= 24) CheckSize(be32(16), be32(20), "PNG", context);
+    PngSource src{data, size, 0, {}};
+    if (!DecodePng(&src, &out))
+      throw InputError(context + ": not a readable image (PNG: " + src.message + ")");
+    return out;
+  }
+  if (IsJpeg(data, size)) {
+    JpegError err{};
+    double w = 0, h = 0;
+    if (!DecodeJpeg(data, size, &out, &err, &w, &h)) {
+      if (err.message[0] == '\0') CheckSize(w, h, "JPEG", context);
+      throw InputError(context + ": not a readable image (JPEG: " + err.message + ")");
+    }
+    return out;
+  }
+  throw InputError(context + ": not a readable image (expected PNG or JPEG data)");
+}
+
+std::vector<std::uint8_t> EncodeJpeg(const Image8& image, int quality) {
+  INHAND_CHECK(image.channels == 1 || image.channels == 3, "EncodeJpeg takes RGB or grey images");
+  INHAND_CHECK(image.width > 0 && image.height > 0, "EncodeJpeg of an empty image");
+  std::vector<std::uint8_t> bytes;
+  JpegError err{};
+  if (!EncodeJpegInto(image, std::clamp(quality, 1, 100), &bytes, &err))
+    throw std::runtime_error(std::string("JPEG encoding failed: ") + err.message);
+  return bytes;
+}
+
+void WriteImage(const std::string& path, const Image8& image) {
+  INHAND_CHECK(image.channels == 1 || image.channels == 3 || image.channels == 4,
+               "WriteImage takes grey, RGB or RGBA images");
+  const std::string ext = LowerExtension(path);
+  std::vector<std::uint8_t> bytes;
+  if (ext == ".png") {
+    PngSink sink{&bytes, {}};
+    if (!EncodePngLibpng(image, &sink))
+      throw InputError(path + ": cannot encode the PNG (" + sink.message + ")");
+  } else if (ext == ".jpg" || ext == ".jpeg") {
+    if (image.channels == 4) throw InputError(path + ": JPEG has no alpha; write a .png");
+    bytes = EncodeJpeg(image, 95);
+  } else {
+    throw InputError(path + ": cannot write image (expected a .png, .jpg or .jpeg name)");
+  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+  if (!out.good()) throw InputError(path + ": cannot write image");
 }
 
 }  // namespace inhand

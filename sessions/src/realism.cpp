@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <sstream>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "inhand/core/error.hpp"
@@ -15,6 +14,7 @@
 #include "inhand/io/mesh_io.hpp"
 #include "inhand/renderer/renderer.hpp"
 #include "inhand/renderer/views.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand {
 
@@ -218,19 +218,16 @@ void TintObject(ObjectModel& object, const Vec3& gains) {
   for (TriangleMesh& m : object.visual) {
     m.material.rgba.head<3>() = m.material.rgba.head<3>().cwiseProduct(gains).cwiseMin(1.0);
     if (!m.material.HasTexture()) continue;
-    cv::Mat tex = m.material.texture_blob.empty()
-                      ? cv::imread(m.material.texture_file, cv::IMREAD_COLOR)
-                      : cv::imdecode(m.material.texture_blob, cv::IMREAD_COLOR);
-    if (tex.empty())
-      throw InputError(object.source + ": texture of material '" + m.material.name +
-                       "' does not decode");
-    cv::Mat f;
+    const std::string what = object.source + ": texture of material '" + m.material.name + "'";
+    Image8 rgb =
+        m.material.texture_blob.empty()
+            ? ReadImage(m.material.texture_file)
+            : DecodeImage(m.material.texture_blob.data(), m.material.texture_blob.size(), what);
+    cv::Mat tex(rgb.height, rgb.width, CV_8UC3, rgb.data.data()), f;
     tex.convertTo(f, CV_32FC3);
-    cv::multiply(f, cv::Scalar(gains.z(), gains.y(), gains.x()), f);  // BGR
-    f.convertTo(tex, CV_8UC3);                                        // saturates
-    std::vector<std::uint8_t> png;
-    cv::imencode(".png", tex, png);
-    m.material.texture_blob = std::move(png);
+    cv::multiply(f, cv::Scalar(gains.x(), gains.y(), gains.z()), f);  // RGB
+    f.convertTo(tex, CV_8UC3);                                        // saturates, in place
+    m.material.texture_blob = EncodePng(rgb);
     m.material.texture_file.clear();
   }
 }
@@ -511,12 +508,8 @@ void CameraSimulator::Capture(const std::vector<Scene>& subframes, Image8& out) 
     }
   }
   if (effects_.Has(Effect::kCameraJpeg)) {
-    cv::Mat rgb8(H, W, CV_8UC3, out.data.data()), bgr;
-    cv::cvtColor(rgb8, bgr, cv::COLOR_RGB2BGR);
-    std::vector<std::uint8_t> jpg;
-    cv::imencode(".jpg", bgr, jpg, {cv::IMWRITE_JPEG_QUALITY, params_.jpeg_quality});
-    cv::Mat back = cv::imdecode(jpg, cv::IMREAD_COLOR);
-    cv::cvtColor(back, rgb8, cv::COLOR_BGR2RGB);  // into out.data
+    const std::vector<std::uint8_t> jpg = EncodeJpeg(out, params_.jpeg_quality);
+    out.data = DecodeImage(jpg.data(), jpg.size(), "the simulated camera's JPEG").data;
   }
 }
 

@@ -4,11 +4,11 @@
 #include <random>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "inhand/core/mesh.hpp"
 #include "inhand/renderer/views.hpp"
+#include "inhand/sessions/image_io.hpp"
 
 namespace inhand::sim {
 namespace {
@@ -19,9 +19,10 @@ TriangleMesh TexturedBox(const Vec3& half, const cv::Mat& texture_bgr) {
   m.uvs.clear();
   for (const Vec3& v : m.vertices)
     m.uvs.emplace_back(0.5 + 0.5 * v.x() / half.x(), 0.5 + 0.5 * v.y() / half.y());
-  std::vector<std::uint8_t> png;
-  cv::imencode(".png", texture_bgr, png);
-  m.material.texture_blob = png;
+  Image8 rgb(texture_bgr.cols, texture_bgr.rows, 3);
+  cv::Mat out(rgb.height, rgb.width, CV_8UC3, rgb.data.data());
+  cv::cvtColor(texture_bgr, out, cv::COLOR_BGR2RGB);
+  m.material.texture_blob = EncodePng(rgb);
   m.material.rgba = Eigen::Vector4d(1, 1, 1, 1);
   return m;
 }
