@@ -25,33 +25,35 @@ namespace {
 
 constexpr double kMaxPixels = 1 << 28;  // 268 megapixels
 
-std::string Dimensions(double w, double h) {
-  return std::to_string(static_cast<long long>(w)) + "x" +
-         std::to_string(static_cast<long long>(h));
-}
+bool SizeInRange(double w, double h) { return w >= 1 && h >= 1 && w * h <= kMaxPixels; }
 
 // Any image header's size: refuse an absurd one before allocating (a 60000 x 60000 PNG header).
 void CheckSize(double w, double h, const char* format, const std::string& what) {
-  if (w < 1 || h < 1 || w * h > kMaxPixels)
-    throw InputError(what + ": the " + format + " header says " + Dimensions(w, h) +
-                     " px; expected 1 to 268 million pixels");
+  if (!SizeInRange(w, h))
+    throw InputError(
+        what + ": the " + format + " header says " + std::to_string(static_cast<long long>(w)) +
+        "x" + std::to_string(static_cast<long long>(h)) + " px; expected 1 to 268 million pixels");
 }
 
 // ---- PNG ------------------------------------------------------------------------------------
+
+// libpng's error text, kept for the InputError (libpng's error pointer, reading and writing).
+struct PngMessage {
+  char text[256];
+};
+
+void PngError(png_structp png, png_const_charp msg) {
+  auto* message = static_cast<PngMessage*>(png_get_error_ptr(png));
+  std::snprintf(message->text, sizeof(message->text), "%s", msg);
+  png_longjmp(png, 1);
+}
+void PngWarning(png_structp, png_const_charp) {}
 
 struct PngSource {
   const std::uint8_t* data;
   std::size_t size;
   std::size_t pos;
-  char message[256];
 };
-
-void PngError(png_structp png, png_const_charp msg) {
-  auto* src = static_cast<PngSource*>(png_get_error_ptr(png));
-  std::snprintf(src->message, sizeof(src->message), "%s", msg);
-  png_longjmp(png, 1);
-}
-void PngWarning(png_structp, png_const_charp) {}
 
 void PngRead(png_structp png, png_bytep out, png_size_t n) {
   auto* src = static_cast<PngSource*>(png_get_io_ptr(png));
@@ -61,9 +63,10 @@ void PngRead(png_structp png, png_bytep out, png_size_t n) {
 }
 
 // 8-bit RGB whatever the file holds, as OpenCV's IMREAD_COLOR gives it: palettes and grey
-// expanded, 16 bits cut to their high byte, alpha dropped (not composited).
-bool DecodePng(PngSource* src, Image8* out) {
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, src, PngError, PngWarning);
+// expanded, 16 bits cut to their high byte, alpha dropped (not composited). The header's size
+// has been checked by the caller.
+bool DecodePng(PngSource* src, Image8* out, PngMessage* message) {
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, message, PngError, PngWarning);
   if (png == nullptr) return false;
   png_infop info = png_create_info_struct(png);
   std::vector<png_bytep> rows;
@@ -73,8 +76,7 @@ bool DecodePng(PngSource* src, Image8* out) {
   }
   png_set_read_fn(png, src, PngRead);
   png_read_info(png, info);
-  const double w = png_get_image_width(png, info), h = png_get_image_height(png, info);
-  if (w < 1 || h < 1 || w * h > kMaxPixels) png_error(png, "image size out of range");
+  const auto w = png_get_image_width(png, info), h = png_get_image_height(png, info);
   const int colour = png_get_color_type(png, info);
   const int depth = png_get_bit_depth(png, info);
   if (colour == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
@@ -84,7 +86,7 @@ bool DecodePng(PngSource* src, Image8* out) {
   if ((colour & PNG_COLOR_MASK_COLOR) == 0) png_set_gray_to_rgb(png);
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
-  if (png_get_channels(png, info) != 3 || png_get_rowbytes(png, info) != 3 * std::size_t(w))
+  if (png_get_channels(png, info) != 3 || png_get_rowbytes(png, info) != 3 * std::size_t{w})
     png_error(png, "unsupported pixel layout");
   *out = Image8(static_cast<int>(w), static_cast<int>(h), 3);
   rows.resize(static_cast<std::size_t>(h));
@@ -95,26 +97,16 @@ bool DecodePng(PngSource* src, Image8* out) {
   return true;
 }
 
-struct PngSink {
-  std::vector<std::uint8_t>* bytes;
-  char message[256];
-};
-
 void PngWrite(png_structp png, png_bytep data, png_size_t n) {
-  auto* sink = static_cast<PngSink*>(png_get_io_ptr(png));
-  sink->bytes->insert(sink->bytes->end(), data, data + n);
+  auto* bytes = static_cast<std::vector<std::uint8_t>*>(png_get_io_ptr(png));
+  bytes->insert(bytes->end(), data, data + n);
 }
 void PngFlush(png_structp) {}
-void PngSinkError(png_structp png, png_const_charp msg) {
-  auto* sink = static_cast<PngSink*>(png_get_error_ptr(png));
-  std::snprintf(sink->message, sizeof(sink->message), "%s", msg);
-  png_longjmp(png, 1);
-}
 
 // Grey, RGB or RGBA as PNG, with the settings OpenCV's writer uses by default (zlib level 1,
 // run-length strategy): saved pictures stay as small as before.
-bool EncodePngLibpng(const Image8& image, PngSink* sink) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, sink, PngSinkError, PngWarning);
+bool EncodePngLibpng(const Image8& image, std::vector<std::uint8_t>* bytes, PngMessage* message) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, message, PngError, PngWarning);
   if (png == nullptr) return false;
   png_infop info = png_create_info_struct(png);
   std::vector<png_bytep> rows(static_cast<std::size_t>(image.height));
@@ -122,7 +114,7 @@ bool EncodePngLibpng(const Image8& image, PngSink* sink) {
     png_destroy_write_struct(&png, &info);
     return false;
   }
-  png_set_write_fn(png, sink, PngWrite, PngFlush);
+  png_set_write_fn(png, bytes, PngWrite, PngFlush);
   png_set_compression_level(png, 1);
   png_set_compression_strategy(png, 3);  // Z_RLE
   const int type = image.channels == 1   ? PNG_COLOR_TYPE_GRAY
@@ -155,8 +147,10 @@ void JpegExit(j_common_ptr cinfo) {
 }
 void JpegMessage(j_common_ptr) {}
 
+// False with err->message on a libjpeg error; throws InputError naming `context` when the
+// header's size is out of range.
 bool DecodeJpeg(const std::uint8_t* data, std::size_t size, Image8* out, JpegError* err,
-                double* header_w, double* header_h) {
+                const std::string& context) {
   jpeg_decompress_struct cinfo{};
   cinfo.err = jpeg_std_error(&err->mgr);
   err->mgr.error_exit = JpegExit;
@@ -168,11 +162,10 @@ bool DecodeJpeg(const std::uint8_t* data, std::size_t size, Image8* out, JpegErr
   jpeg_create_decompress(&cinfo);
   jpeg_mem_src(&cinfo, data, static_cast<unsigned long>(size));
   jpeg_read_header(&cinfo, TRUE);
-  *header_w = cinfo.image_width;
-  *header_h = cinfo.image_height;
-  if (*header_w < 1 || *header_h < 1 || *header_w * *header_h > kMaxPixels) {
+  const double w = cinfo.image_width, h = cinfo.image_height;
+  if (!SizeInRange(w, h)) {
     jpeg_destroy_decompress(&cinfo);
-    return false;
+    CheckSize(w, h, "JPEG", context);
   }
   cinfo.out_color_space = JCS_RGB;
   jpeg_start_decompress(&cinfo);
@@ -254,18 +247,16 @@ Image8 DecodeImage(const std::uint8_t* data, std::size_t size, const std::string
              data[at + 3];
     };
     if (size >= 24) CheckSize(be32(16), be32(20), "PNG", context);
-    PngSource src{data, size, 0, {}};
-    if (!DecodePng(&src, &out))
-      throw InputError(context + ": not a readable image (PNG: " + src.message + ")");
+    PngSource src{data, size, 0};
+    PngMessage message{};
+    if (!DecodePng(&src, &out, &message))
+      throw InputError(context + ": not a readable image (PNG: " + message.text + ")");
     return out;
   }
   if (IsJpeg(data, size)) {
     JpegError err{};
-    double w = 0, h = 0;
-    if (!DecodeJpeg(data, size, &out, &err, &w, &h)) {
-      if (err.message[0] == '\0') CheckSize(w, h, "JPEG", context);
+    if (!DecodeJpeg(data, size, &out, &err, context))
       throw InputError(context + ": not a readable image (JPEG: " + err.message + ")");
-    }
     return out;
   }
   throw InputError(context + ": not a readable image (expected PNG or JPEG data)");
@@ -287,9 +278,9 @@ void WriteImage(const std::string& path, const Image8& image) {
   const std::string ext = LowerExtension(path);
   std::vector<std::uint8_t> bytes;
   if (ext == ".png") {
-    PngSink sink{&bytes, {}};
-    if (!EncodePngLibpng(image, &sink))
-      throw InputError(path + ": cannot encode the PNG (" + sink.message + ")");
+    PngMessage message{};
+    if (!EncodePngLibpng(image, &bytes, &message))
+      throw InputError(path + ": cannot encode the PNG (" + message.text + ")");
   } else if (ext == ".jpg" || ext == ".jpeg") {
     if (image.channels == 4) throw InputError(path + ": JPEG has no alpha; write a .png");
     bytes = EncodeJpeg(image, 95);
