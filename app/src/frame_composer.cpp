@@ -78,14 +78,16 @@ PictureState::Set CaptureSet(const Tracker& tracker, const EstimateRecord& recor
   return set;
 }
 
-OverlayEstimate OverlayOf(const std::string& name, const Rgb& colour,
-                          const PictureState::Set& set) {
+OverlayEstimate OverlayOf(const std::string& name, const Rgb& colour, const PictureState::Set& set,
+                          int selected_link, int selected_visual) {
   OverlayEstimate e{name, colour, set.record.T_PO, set.pose_covariance.topLeftCorner<3, 3>(), false,
                     {},   {}};
   for (const FilterTrace::Contact& c : set.contacts)
-    e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P});
+    e.contacts.push_back({Kind(c.kind), c.c_o_P, c.c_f_P, c.normal_P, c.force_P,
+                          selected_link >= 0 && c.link == selected_link});
   for (const FilterTrace::Visual& v : set.visual)
-    e.features.push_back({v.measured, v.predicted, !v.gated});
+    e.features.push_back(
+        {v.measured, v.predicted, !v.gated, selected_visual >= 0 && v.id == selected_visual});
   return e;
 }
 
@@ -125,7 +127,10 @@ void FrameComposer::AddEstimates(OverlayFrame* of, const PictureState& st) const
         {"truth", kColourTruth, s.GroundTruthAt(st.t), Mat3::Zero(), true, {}, {}});
   for (std::size_t i = 0; i < p_.sets().size(); ++i) {
     const PictureState::Set& set = st.sets[i];
-    of->estimates.push_back(OverlayOf(p_.sets()[i].name, p_.sets()[i].colour, set));
+    const bool chosen = selection.set == static_cast<int>(i);
+    of->estimates.push_back(OverlayOf(p_.sets()[i].name, p_.sets()[i].colour, set,
+                                      chosen ? selection.link : -1,
+                                      chosen ? selection.visual : -1));
     of->hud.push_back(HudLine(p_.sets()[i].name, set));
   }
 }

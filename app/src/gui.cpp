@@ -70,6 +70,7 @@ struct GuiState {
   // The whole session's events and series (SessionOverview), and how far they are known.
   SessionOverview::Data overview;
   long overview_version = -1;     // -1: copy whatever the overview has
+  int overview_link = -1;         // the link whose series `overview` holds (the inspected one)
   bool timeline_contacts = true;  // contact events on the timeline and in [ ] jumps
   int error_axis = 0;  // the Errors tab: 0 norms and largest axes, 1-3 the object frame's x, y, z
   int bias_joint = 0;  // the Biases and counts tab's joint (configuration order)
@@ -79,6 +80,13 @@ struct GuiState {
   double view_t0 = NAN, view_t1 = NAN;
   std::vector<char> hidden;  // per set: left out of the timeline and the plots (keys 1-9)
   bool help = false;         // the keys' help over the views (h)
+  // The inspector: the set whose measurements it lists (-1: the last), and what is selected in
+  // it, ringed in the views: a link's contacts or a visual measurement (FilterTrace::Visual::id).
+  int inspect_set = -1, inspect_link = -1, inspect_visual = -1;
+  bool open_inspector = false;  // a script's `select` brings the Inspector tab to the front
+  // Where the composed picture was last drawn (window pixels) and its width in pixels.
+  ImVec2 picture_min{0, 0}, picture_max{0, 0};
+  int picture_width = 0;
   bool Hidden(std::size_t set) const { return set < hidden.size() && hidden[set]; }
   // The layout (splitters), kept in the user's configuration folder (GuiLayout).
   float panel_width = 330.0f;  // [px] the left panel
@@ -158,6 +166,7 @@ class Runner {
   void Restart() {
     player_ = std::make_unique<SessionPlayer>(session_, state_.params, state_.sets);
     composer_ = std::make_unique<FrameComposer>(*player_);
+    ForgetVisual();
     next_ = 0;
     last_frame_ = -1;
     checkpoints_.clear();
@@ -181,6 +190,7 @@ class Runner {
     if (overview_ && overview_->CheckpointIn(std::max(after, resume), k + 1, overview_resume,
                                              from_overview, overview_frame)) {
       player_->Restore(from_overview);
+      ForgetVisual();
       next_ = overview_resume;
       last_frame_ = overview_frame;
       state_.pictures_dirty = true;
@@ -189,6 +199,7 @@ class Runner {
     } else if (resume >= 0) {
       const RunnerCheckpoint& c = checkpoints_.at(resume);
       player_->Restore(c.player);
+      ForgetVisual();
       next_ = resume;
       last_frame_ = c.last_frame;
       state_.pictures_dirty = true;
@@ -197,6 +208,7 @@ class Runner {
     }
     while (next_ <= k) {
       player_->Step(next_);
+      KeepVisual();
       if (player_->last_frame() >= 0)
         last_frame_ = player_->last_frame(), state_.pictures_dirty = true;
       if (!session_.info().camera)
@@ -212,6 +224,9 @@ class Runner {
   }
   Image8 Picture() {
     composer_->orbit = state_.orbit;
+    composer_->selection = {
+        state_.inspect_set < 0 ? static_cast<int>(player_->sets().size()) - 1 : state_.inspect_set,
+        state_.inspect_link, state_.inspect_visual};
     const double t = session_.t(std::max(0, next_ - 1));
     // Without a camera: the external 3-D view of the grasp (hand, estimates, contacts, forces).
     if (!session_.info().camera)
@@ -224,6 +239,10 @@ class Runner {
     while (k + 1 < session_.num_samples() && session_.t(k + 1) <= t) ++k;
     return k;
   }
+  // Set i's measurements of the last image it fused, and that image's time (NaN: none since the
+  // player was last restored or restarted).
+  const std::vector<FilterTrace::Visual>& visual(std::size_t i) const { return visual_[i]; }
+  double visual_t(std::size_t i) const { return visual_t_[i]; }
   int sample() const { return next_ - 1; }
   int frame() const { return last_frame_; }
   const SessionPlayer& player() const { return *player_; }
@@ -246,11 +265,64 @@ class Runner {
     int last_frame;
   };
   std::map<int, RunnerCheckpoint> checkpoints_;
+  std::vector<std::vector<FilterTrace::Visual>> visual_;
+  std::vector<double> visual_t_;
+  void ForgetVisual() {
+    visual_.assign(player_->sets().size(), {});
+    visual_t_.assign(player_->sets().size(), NAN);
+  }
+  void KeepVisual() {
+    for (std::size_t i = 0; i < player_->sets().size(); ++i) {
+      const FilterTrace& trace = player_->tracker(i).filter().trace();
+      if (!trace.visual.empty()) visual_[i] = trace.visual, visual_t_[i] = session_.t(next_);
+    }
+  }
 };
+
+// Brings the GUI's copy of the overview up to date; of the per-link series, the inspected link's.
+void ReadOverview(Runner& runner, GuiState& state) {
+  if (state.inspect_link != state.overview_link)
+    state.overview_version = -1, state.overview_link = state.inspect_link;
+  state.overview_version =
+      runner.overview().Read(state.overview_version, state.overview, state.overview_link);
+}
+
+// The set the inspector lists: the one chosen, else the last (the richest: it is drawn last and
+// its virtual view is the middle panel).
+std::size_t InspectedSet(const Runner& runner, const GuiState& state) {
+  const std::size_t n = runner.player().sets().size();
+  return state.inspect_set >= 0 && static_cast<std::size_t>(state.inspect_set) < n
+             ? static_cast<std::size_t>(state.inspect_set)
+             : n - 1;
+}
 
 struct Textures {
   Texture picture, camera_edges, virtual_edges, difference, corners, pieces, votes, matches;
+  Texture patch_camera, patch_virtual;  // the inspector's selected visual measurement, zoomed
+  bool has_patch_camera = false, has_patch_virtual = false;  // for the selection shown now
 };
+
+// The (2 half + 1)² pixels of an RGB image around `centre`, each drawn zoom × zoom, grey outside
+// the image, with a yellow cross hair on the centre pixel.
+Image8 ZoomedPatch(const Image8& image, const Vec2& centre, int half, int zoom) {
+  const int side = (2 * half + 1) * zoom;
+  Image8 out(side, side, 3);
+  const int cx = static_cast<int>(std::lround(centre.x())),
+            cy = static_cast<int>(std::lround(centre.y()));
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      const int sx = cx - half + x / zoom, sy = cy - half + y / zoom;
+      std::uint8_t* o = out.pixel(x, y);
+      const bool inside =
+          image.channels >= 3 && sx >= 0 && sy >= 0 && sx < image.width && sy < image.height;
+      for (int c = 0; c < 3; ++c) o[c] = inside ? image.pixel(sx, sy)[c] : 90;
+      const int dx = x - half * zoom - zoom / 2, dy = y - half * zoom - zoom / 2;
+      if ((dx == 0 || dy == 0) && std::abs(dx) + std::abs(dy) >= zoom &&
+          std::abs(dx) + std::abs(dy) <= 3 * zoom)
+        o[0] = 255, o[1] = 225, o[2] = 0;
+    }
+  return out;
+}
 
 void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiState& state,
                     Textures& tex) {
@@ -268,6 +340,22 @@ void UpdateTextures(const GuiGl& gl, RenderThread& render, Runner& runner, GuiSt
   tex.pieces.Upload(gl, m.pieces);
   tex.votes.Upload(gl, m.votes);
   tex.matches.Upload(gl, m.matches);
+  // The inspector's selected visual measurement: where the camera saw it, and where the virtual
+  // image (feature sets) put it before the update.
+  Image8 camera_patch, virtual_patch;
+  const std::size_t set = InspectedSet(runner, state);
+  for (const FilterTrace::Visual& v : runner.visual(set)) {
+    if (v.id != state.inspect_visual) continue;
+    const Image8& image = runner.player().last_image();
+    if (!image.empty()) camera_patch = ZoomedPatch(image, v.measured, 12, 6);
+    const VisualStep& step = runner.player().tracker(set).last_visual();
+    if (step.has_features && !step.virtual_view.colour.empty())
+      virtual_patch = ZoomedPatch(step.virtual_view.colour, v.predicted, 12, 6);
+  }
+  tex.patch_camera.Upload(gl, camera_patch);
+  tex.patch_virtual.Upload(gl, virtual_patch);
+  tex.has_patch_camera = !camera_patch.empty();
+  tex.has_patch_virtual = !virtual_patch.empty();
 }
 
 void ApplyActions(Runner& runner, GuiState& state) {
@@ -959,6 +1047,265 @@ void DrawCountPlots(Runner& runner, GuiState& state, float avail) {
   }
 }
 
+// The inspector's colours of a link's contact status (ContactStatus): nothing, a candidate, a
+// rejected torque candidate, a fused kinematic or torque constraint, a gated one.
+ImU32 StatusColour(ContactStatus s) {
+  switch (s) {
+    case ContactStatus::kNone:
+      return IM_COL32(30, 32, 42, 255);
+    case ContactStatus::kCandidate:
+      return IM_COL32(105, 105, 115, 255);
+    case ContactStatus::kRejected:
+      return IM_COL32(190, 80, 200, 255);
+    case ContactStatus::kKinematic:
+      return IM_COL32(70, 140, 240, 255);
+    case ContactStatus::kTorque:
+      return IM_COL32(60, 200, 90, 255);
+    case ContactStatus::kGated:
+      return IM_COL32(235, 60, 50, 255);
+  }
+  return IM_COL32(0, 0, 0, 255);
+}
+
+// The selected link's status over the shared window, one lane per set: per pixel column the most
+// telling status of its samples (ContactStatus's order); the cursor; a click seeks.
+void DrawStatusLanes(Runner& runner, GuiState& state, std::size_t link, float width) {
+  const Session& s = runner.session();
+  const SessionPlayer& p = runner.player();
+  const SessionOverview::Data& data = state.overview;
+  constexpr float kLeft = 52.0f, kRight = 6.0f, kLane = 12.0f, kLegend = 16.0f;
+  const float height = kLegend + kLane * static_cast<float>(p.sets().size());
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  ImGui::InvisibleButton("status lanes", ImVec2(width, height));
+  const bool hovered = ImGui::IsItemHovered(), active = ImGui::IsItemActive();
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  const float x0 = origin.x + kLeft, x1 = origin.x + width - kRight;
+  if (hovered) ZoomAndPan(s, state, x0, x1);
+  const auto [w0, w1] = TimeWindow(s, state);
+  const auto x_of = [&](double t) {
+    return x0 + static_cast<float>((t - w0) / (w1 - w0)) * (x1 - x0);
+  };
+  dl->AddRectFilled(origin, ImVec2(origin.x + width, origin.y + height), IM_COL32(22, 22, 28, 255));
+  float lx = x0;
+  for (int k = 1; k <= static_cast<int>(ContactStatus::kGated); ++k) {
+    const ContactStatus status = static_cast<ContactStatus>(k);
+    dl->AddRectFilled(ImVec2(lx, origin.y + 4), ImVec2(lx + 9, origin.y + 13),
+                      StatusColour(status));
+    dl->AddText(ImVec2(lx + 12, origin.y), IM_COL32(200, 200, 210, 255), ContactStatusName(status));
+    lx += 24 + ImGui::CalcTextSize(ContactStatusName(status)).x;
+  }
+  const auto first = std::lower_bound(data.t.begin(), data.t.end(), w0);
+  const auto last = std::upper_bound(data.t.begin(), data.t.end(), w1);
+  const std::size_t a = static_cast<std::size_t>(first - data.t.begin()),
+                    b = static_cast<std::size_t>(last - data.t.begin());
+  for (std::size_t i = 0; i < p.sets().size() && i < data.sets.size(); ++i) {
+    const float y = origin.y + kLegend + kLane * static_cast<float>(i);
+    const Rgb& c = p.sets()[i].colour;
+    dl->AddText(ImVec2(origin.x + 4, y - 2), IM_COL32(c.r, c.g, c.b, state.Hidden(i) ? 90 : 255),
+                p.sets()[i].name.c_str());
+    dl->AddRectFilled(ImVec2(x0, y + 1), ImVec2(x1, y + kLane - 1),
+                      StatusColour(ContactStatus::kNone));
+    if (link >= data.sets[i].link_status.size()) continue;
+    const std::vector<std::uint8_t>& status = data.sets[i].link_status[link];
+    int column = -1, worst = 0;
+    const auto flush = [&] {
+      if (column >= 0 && worst > 0) {
+        const float x = x0 + static_cast<float>(column);
+        dl->AddRectFilled(ImVec2(x, y + 1), ImVec2(x + 1, y + kLane - 1),
+                          StatusColour(static_cast<ContactStatus>(worst)));
+      }
+    };
+    for (std::size_t k = a; k < std::min(b, status.size()); ++k) {
+      const int col = static_cast<int>(std::floor(x_of(data.t[k]) - x0));
+      const int v = static_cast<int>(status[k]);
+      if (col != column)
+        flush(), column = col, worst = v;
+      else
+        worst = std::max(worst, v);
+    }
+    flush();
+  }
+  const float cursor = x_of(s.t(std::max(0, runner.sample())));
+  if (cursor >= x0 && cursor <= x1)
+    dl->AddLine(ImVec2(cursor, origin.y + kLegend), ImVec2(cursor, origin.y + height),
+                IM_COL32(255, 255, 255, 255), 1.5f);
+  const ImGuiIO& io = ImGui::GetIO();
+  if (active && ImGui::IsMouseDown(ImGuiMouseButton_Left) && io.MousePos.x >= x0 &&
+      io.MousePos.x <= x1) {
+    const int sample = runner.SampleAt(w0 + (io.MousePos.x - x0) / (x1 - x0) * (w1 - w0));
+    if (sample != runner.sample()) state.actions.push_back({ActionKind::kSeek, sample});
+  }
+}
+
+// A visual measurement's name: a tag's corner (id = tag * 4 + corner) or a feature match.
+std::string VisualName(const ModalitySet& set, int id) {
+  char name[48];
+  if (set.tags && !set.features)
+    std::snprintf(name, sizeof name, "tag %d corner %d", id / 4, id % 4);
+  else
+    std::snprintf(name, sizeof name, "match %d", id);
+  return name;
+}
+
+// Every measurement of one set's last step — each link's contact and each visual measurement of
+// the image fused at it — in tables; a click on a row selects it (ringed in every view). For a
+// selected link, its history over the shared window, every set: status lanes, signed distance,
+// force from the torques, the Mahalanobis distance of its constraint against the gate.
+void DrawInspector(Runner& runner, GuiState& state, const Textures& tex, float avail) {
+  const SessionPlayer& p = runner.player();
+  const HandModel& hand = p.models().hand;
+  const std::size_t set = InspectedSet(runner, state);
+  ImGui::SetNextItemWidth(120);
+  if (ImGui::BeginCombo("set", p.sets()[set].name.c_str())) {
+    for (std::size_t i = 0; i < p.sets().size(); ++i)
+      if (ImGui::Selectable(p.sets()[i].name.c_str(), i == set))
+        state.inspect_set = static_cast<int>(i), state.pictures_dirty = true;
+    ImGui::EndCombo();
+  }
+  const FilterTrace& trace = p.tracker(set).filter().trace();
+  static std::vector<LinkContact> links;
+  LinkContacts(trace, hand.links.size(), links);
+  const std::vector<FilterTrace::Visual>& visual = runner.visual(set);
+  ImGui::SameLine();
+  if (std::isnan(runner.visual_t(set)))
+    ImGui::Text("its step at %.3f s: %d constraints applied, %d gated",
+                runner.session().t(std::max(0, runner.sample())), trace.num_constraints,
+                trace.num_gated);
+  else
+    ImGui::Text("its step at %.3f s: %d constraints applied, %d gated; its last image at %.3f s",
+                runner.session().t(std::max(0, runner.sample())), trace.num_constraints,
+                trace.num_gated, runner.visual_t(set));
+  const double gate = state.params.filter.contact_gate_chi2;
+  const float table_height = std::min(150.0f, ImGui::GetContentRegionAvail().y * 0.4f);
+  const ImGuiTableFlags flags = ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg |
+                                ImGuiTableFlags_ScrollY | ImGuiTableFlags_SizingStretchProp;
+  const float half = (avail - ImGui::GetStyle().ItemSpacing.x) / 2;
+  if (ImGui::BeginTable("contacts", 5, flags, ImVec2(half, table_height))) {
+    ImGui::TableSetupScrollFreeze(0, 1);
+    ImGui::TableSetupColumn("link");
+    ImGui::TableSetupColumn("status");
+    ImGui::TableSetupColumn("distance mm");
+    ImGui::TableSetupColumn("force N");
+    ImGui::TableSetupColumn(gate > 0 ? "Mahalanobis / gate" : "Mahalanobis");
+    ImGui::TableHeadersRow();
+    for (std::size_t l = 0; l < links.size(); ++l) {
+      const LinkContact& c = links[l];
+      if (c.status == ContactStatus::kNone) continue;
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::PushID(static_cast<int>(l));
+      const bool selected = state.inspect_link == static_cast<int>(l);
+      if (ImGui::Selectable(hand.links[l].name.c_str(), selected,
+                            ImGuiSelectableFlags_SpanAllColumns)) {
+        state.inspect_set = static_cast<int>(set);
+        state.inspect_link = static_cast<int>(l), state.inspect_visual = -1;
+        state.pictures_dirty = true;
+      }
+      ImGui::PopID();
+      ImGui::TableNextColumn();
+      ImGui::TextColored(ImGui::ColorConvertU32ToFloat4(StatusColour(c.status)), "%s",
+                         ContactStatusName(c.status));
+      ImGui::TableNextColumn();
+      ImGui::Text("%.2f", c.distance * 1000);
+      ImGui::TableNextColumn();
+      ImGui::Text(c.force > 0 ? "%.2f" : "-", c.force);
+      ImGui::TableNextColumn();
+      if (std::isnan(c.mahalanobis))
+        ImGui::TextUnformatted("-");
+      else if (gate > 0)
+        ImGui::Text("%.2f / %.2f", c.mahalanobis, gate);
+      else
+        ImGui::Text("%.2f", c.mahalanobis);
+    }
+    ImGui::EndTable();
+  }
+  ImGui::SameLine();
+  if (ImGui::BeginTable("visual", 5, flags, ImVec2(half, table_height))) {
+    ImGui::TableSetupScrollFreeze(0, 1);
+    ImGui::TableSetupColumn("measurement");
+    ImGui::TableSetupColumn("measured px");
+    ImGui::TableSetupColumn("residual px");
+    ImGui::TableSetupColumn("Mahalanobis");
+    ImGui::TableSetupColumn("fused");
+    ImGui::TableHeadersRow();
+    for (const FilterTrace::Visual& v : visual) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::PushID(v.id);
+      if (ImGui::Selectable(VisualName(p.sets()[set], v.id).c_str(), state.inspect_visual == v.id,
+                            ImGuiSelectableFlags_SpanAllColumns)) {
+        state.inspect_set = static_cast<int>(set);
+        state.inspect_visual = v.id, state.inspect_link = -1;
+        state.pictures_dirty = true;
+      }
+      ImGui::PopID();
+      ImGui::TableNextColumn();
+      ImGui::Text("%.1f, %.1f", v.measured.x(), v.measured.y());
+      ImGui::TableNextColumn();
+      ImGui::Text("%.2f", (v.measured - v.predicted).norm());
+      ImGui::TableNextColumn();
+      ImGui::Text("%.2f", v.mahalanobis);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(v.gated ? "gated" : "fused");
+    }
+    ImGui::EndTable();
+  }
+  for (const FilterTrace::Visual& v : visual) {
+    if (v.id != state.inspect_visual) continue;
+    const Vec2 r = v.measured - v.predicted;
+    ImGui::TextWrapped(
+        "%s of the image at %.3f s: measured (%.1f, %.1f) px, predicted at the estimate "
+        "before the update (%.1f, %.1f) px, residual (%.2f, %.2f) px; Mahalanobis %.2f "
+        "against the gate %.2f: %s",
+        VisualName(p.sets()[set], v.id).c_str(), runner.visual_t(set), v.measured.x(),
+        v.measured.y(), v.predicted.x(), v.predicted.y(), r.x(), r.y(), v.mahalanobis,
+        state.params.filter.visual_gate_chi2, v.gated ? "gated" : "fused");
+    if (tex.has_patch_camera) {
+      ImGui::BeginGroup();
+      ImGui::TextUnformatted("camera (measured)");
+      tex.patch_camera.Show(150);
+      ImGui::EndGroup();
+    }
+    if (tex.has_patch_virtual) {
+      ImGui::SameLine();
+      ImGui::BeginGroup();
+      ImGui::TextUnformatted("virtual (predicted)");
+      tex.patch_virtual.Show(150);
+      ImGui::EndGroup();
+    }
+    return;
+  }
+  if (state.inspect_link < 0 || static_cast<std::size_t>(state.inspect_link) >= links.size()) {
+    ImGui::TextUnformatted(
+        "click a row: a link's history, a visual measurement's pixels; the selection is ringed "
+        "in yellow in the views");
+    return;
+  }
+  using Set = SessionOverview::Set;
+  const std::size_t l = static_cast<std::size_t>(state.inspect_link);
+  const std::string name = hand.links[l].name;
+  ImGui::Text("%s in every set (the lanes and plots share the timeline's window; click to seek)",
+              name.c_str());
+  DrawStatusLanes(runner, state, l, avail);
+  static const std::vector<float> kNone;
+  const auto of_link = [l](std::vector<std::vector<float>> Set::*m) -> Series {
+    return [m, l](const Set& s) -> const std::vector<float>& {
+      return l < (s.*m).size() ? (s.*m)[l] : kNone;
+    };
+  };
+  std::vector<PlotSpec> plots = {
+      {"##ldistance", "signed distance", "mm", of_link(&Set::link_distance)},
+      {"##lforce", "force from torques", "N", of_link(&Set::link_force)},
+      {"##lmahalanobis", "Mahalanobis", "", of_link(&Set::link_mahalanobis)}};
+  plots[0].line = 0.0;
+  if (gate > 0) plots[2].line = gate;
+  const ImVec2 size((avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3, 104);
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    if (i > 0) ImGui::SameLine();
+    DrawPlot(runner, state, plots[i], size);
+  }
+}
+
 // Every event of every set in time order, filtered by text; a click seeks to it.
 void DrawEventList(Runner& runner, GuiState& state, float avail) {
   const SessionPlayer& p = runner.player();
@@ -1063,6 +1410,73 @@ void DrawHelp(GuiState& state, int width, int height) {
   ImGui::End();
 }
 
+// Where the camera panel draws a point of the palm frame at the current camera frame.
+bool CameraPixel(Runner& runner, const Vec3& X_P, Vec2& pixel) {
+  const Session& s = runner.session();
+  if (!s.info().camera || runner.frame() < 0) return false;
+  const Vec3 X_C =
+      s.camera_frames().at(static_cast<std::size_t>(runner.frame())).T_PC.inverse() * X_P;
+  if (X_C.z() <= 1e-6) return false;
+  pixel = s.info().camera->Project(X_C);
+  return true;
+}
+
+// The selection in words, "SET/LINK" or "SET/visual:ID" ("nothing"), and where the camera panel
+// draws it (a link: its nearest contact's point on the object; NaN when not drawn).
+std::string DescribeSelection(Runner& runner, const GuiState& state, Vec2& pixel) {
+  const SessionPlayer& p = runner.player();
+  const std::size_t set = InspectedSet(runner, state);
+  pixel = Vec2::Constant(NAN);
+  const std::string prefix = p.sets()[set].name + "/";
+  if (state.inspect_visual >= 0) {
+    for (const FilterTrace::Visual& v : runner.visual(set))
+      if (v.id == state.inspect_visual) pixel = v.measured;
+    return prefix + "visual:" + std::to_string(state.inspect_visual);
+  }
+  const auto& links = p.models().hand.links;
+  if (state.inspect_link < 0 || static_cast<std::size_t>(state.inspect_link) >= links.size())
+    return "nothing";
+  double nearest = INFINITY;
+  for (const FilterTrace::Contact& c : p.tracker(set).filter().trace().contacts) {
+    Vec2 q;
+    if (c.link == state.inspect_link && c.distance < nearest && CameraPixel(runner, c.c_o_P, q))
+      nearest = c.distance, pixel = q;
+  }
+  return prefix + links[static_cast<std::size_t>(state.inspect_link)].name;
+}
+
+// A click on the camera panel of the picture (its pixel `at`, the panel drawn 1:1 from the left)
+// selects the contact or visual measurement drawn nearest to it within 12 px: the inspected set's,
+// else any set's. The Inspector tab comes to the front.
+void SelectInCamera(Runner& runner, GuiState& state, const Vec2& at) {
+  const Session& s = runner.session();
+  const SessionPlayer& p = runner.player();
+  if (!s.info().camera || runner.frame() < 0) return;
+  const Intrinsics& K = *s.info().camera;
+  if (at.x() < 0 || at.y() < 0 || at.x() >= K.width || at.y() >= K.height) return;
+  double best = 12.0;
+  int set = -1, link = -1, visual = -1;
+  // The inspected set's first: the sets' markers of one contact lie within a pixel or two.
+  const std::size_t inspected = InspectedSet(runner, state);
+  for (std::size_t n = 0; n <= p.sets().size() && set < 0; ++n) {
+    const std::size_t i = n == 0 ? inspected : n - 1;
+    if (state.Hidden(i) || (n > 0 && i == inspected)) continue;
+    for (const FilterTrace::Contact& c : p.tracker(i).filter().trace().contacts) {
+      Vec2 q;
+      if (!CameraPixel(runner, c.c_o_P, q)) continue;
+      const double d = (q - at).norm();
+      if (d < best) best = d, set = static_cast<int>(i), link = c.link, visual = -1;
+    }
+    for (const FilterTrace::Visual& v : runner.visual(i)) {
+      const double d = (v.measured - at).norm();
+      if (d < best) best = d, set = static_cast<int>(i), link = -1, visual = v.id;
+    }
+  }
+  if (set < 0) return;
+  state.inspect_set = set, state.inspect_link = link, state.inspect_visual = visual;
+  state.open_inspector = state.pictures_dirty = true;
+}
+
 // gui --script FILE: one command per line (# starts a comment), each run at a frame of its own;
 // inputs take effect by the next command:
 //   wait N                      N frames
@@ -1117,6 +1531,10 @@ class GuiScript {
           fail("press left, right, shift+left or shift+right");
       } else if (c.verb == "screenshot") {
         if (!(words >> c.text)) fail("screenshot FILE");
+      } else if (c.verb == "click-camera") {
+        if (!(words >> c.a >> c.b)) fail("click-camera U V (the camera image's pixels)");
+      } else if (c.verb == "select") {
+        if (!(words >> c.text >> c.text2)) fail("select SET LINK (names)");
       } else if (c.verb == "expect") {
         std::string what;
         words >> what;
@@ -1132,6 +1550,21 @@ class GuiScript {
         } else if (what == "picture") {
           c.verb = "expect-picture";
           if (!(words >> c.a >> c.b)) fail("expect picture SHARE TOL");
+        } else if (what == "selected") {
+          c.verb = "expect-selected";
+          if (!(words >> c.text)) fail("expect selected SET/LINK, SET/visual:ID or nothing");
+        } else if (what == "contact") {
+          c.verb = "expect-contact";
+          bool known = false;
+          if (words >> c.text) {
+            known = c.text == "fused";
+            for (int k = 0; k <= static_cast<int>(ContactStatus::kGated); ++k)
+              known = known || c.text == ContactStatusName(static_cast<ContactStatus>(k));
+          }
+          if (!known)
+            fail(
+                "expect contact STATUS (none, candidate, rejected, kinematic, torque, gated, or "
+                "fused: kinematic or torque)");
         } else if (what == "events") {
           c.verb = "expect-events";
           if (!(words >> c.text >> c.a)) fail("expect events KIND MIN");
@@ -1140,10 +1573,12 @@ class GuiScript {
             known = known || c.text == EventKindName(static_cast<EventKind>(k));
           if (!known) fail("an event kind of FORMAT.md, or any");
         } else {
-          fail("expect time, window, panel, picture or events ...");
+          fail("expect time, window, panel, picture, selected, contact or events ...");
         }
       } else {
-        fail("wait, wait-events, seek, key, press, click, scroll, drag, screenshot or expect");
+        fail(
+            "wait, wait-events, seek, key, press, click, click-camera, scroll, drag, select, "
+            "screenshot or expect");
       }
       script.commands_.push_back(c);
     }
@@ -1198,9 +1633,33 @@ class GuiScript {
         screenshot_ = c.text;
         continue;
       }
-      if (c.verb == "wait-events" || c.verb == "expect-events") {
+      if (c.verb == "select") {
+        const SessionPlayer& p = runner.player();
+        int set = -1, link = -1;
+        for (std::size_t i = 0; i < p.sets().size(); ++i)
+          if (p.sets()[i].name == c.text) set = static_cast<int>(i);
+        for (std::size_t l = 0; l < p.models().hand.links.size(); ++l)
+          if (p.models().hand.links[l].name == c.text2) link = static_cast<int>(l);
+        if (set < 0 || link < 0) {
+          Report(where, false, "no set '" + c.text + "' or no link '" + c.text2 + "'");
+          continue;
+        }
+        state.inspect_set = set, state.inspect_link = link, state.inspect_visual = -1;
+        state.open_inspector = state.pictures_dirty = true;
+        return;
+      }
+      if (c.verb == "expect-selected") {
+        Vec2 pixel;
+        const std::string selected = DescribeSelection(runner, state, pixel);
+        char drawn[96] = "";
+        if (std::isfinite(pixel.x()))
+          std::snprintf(drawn, sizeof drawn, " (drawn at %.2f %.2f px)", pixel.x(), pixel.y());
+        Report(where, selected == c.text, "selected " + selected + drawn + ", expected " + c.text);
+        continue;
+      }
+      if (c.verb == "wait-events" || c.verb == "expect-events" || c.verb == "expect-contact") {
         runner.overview().Wait();
-        state.overview_version = runner.overview().Read(state.overview_version, state.overview);
+        ReadOverview(runner, state);
       }
       if (c.verb == "expect-time") {
         const double t = runner.session().t(std::max(0, runner.sample()));
@@ -1238,6 +1697,31 @@ class GuiScript {
                    FormatDouble(c.a));
         continue;
       }
+      if (c.verb == "expect-contact") {
+        // What the inspector's table says (the GUI's player, at the current sample) and what its
+        // history says there (the overview's replay): two runs, one answer.
+        const std::size_t set = InspectedSet(runner, state);
+        const std::size_t link = static_cast<std::size_t>(std::max(0, state.inspect_link));
+        std::vector<LinkContact> links;
+        LinkContacts(runner.player().tracker(set).filter().trace(),
+                     runner.player().models().hand.links.size(), links);
+        const std::string now =
+            link < links.size() ? ContactStatusName(links[link].status) : "nothing";
+        std::string history = "nothing";
+        const auto k = static_cast<std::size_t>(std::max(0, runner.sample()));
+        if (set < state.overview.sets.size() &&
+            link < state.overview.sets[set].link_status.size() &&
+            k < state.overview.sets[set].link_status[link].size())
+          history = ContactStatusName(
+              static_cast<ContactStatus>(state.overview.sets[set].link_status[link][k]));
+        const auto matches = [&](const std::string& status) {
+          return status == c.text ||
+                 (c.text == "fused" && (status == "kinematic" || status == "torque"));
+        };
+        Report(where, state.inspect_link >= 0 && matches(now) && matches(history),
+               "contact " + now + " (table), " + history + " (history), expected " + c.text);
+        continue;
+      }
       if (c.verb == "wait-events") continue;
       if (c.verb == "wait") {
         wait_ = static_cast<int>(c.a) - 1;
@@ -1247,6 +1731,14 @@ class GuiScript {
         io.AddInputCharacter(c.text == "space" ? ' ' : static_cast<unsigned>(c.text[0]));
       } else if (c.verb == "click") {
         mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
+        io.MousePos = mouse_;
+        pressing_ = true;
+      } else if (c.verb == "click-camera") {  // the camera panel is drawn 1:1 from the left
+        const float scale = state.picture_max.x > state.picture_min.x && state.picture_width > 0
+                                ? (state.picture_max.x - state.picture_min.x) / state.picture_width
+                                : 0.0f;
+        mouse_ = ImVec2(state.picture_min.x + static_cast<float>(c.a) * scale,
+                        state.picture_min.y + static_cast<float>(c.b) * scale);
         io.MousePos = mouse_;
         pressing_ = true;
       } else if (c.verb == "press") {
@@ -1279,7 +1771,7 @@ class GuiScript {
  private:
   struct Command {
     int line = 0;
-    std::string verb, text;
+    std::string verb, text, text2;
     double a = 0.0, b = 0.0, c = 0.0, d = 0.0;
   };
   void Report(const std::string& where, bool ok, const std::string& what) {
@@ -1318,6 +1810,8 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
   tex.picture.Show(avail * state.picture_share);
   const bool picture_hovered = ImGui::IsItemHovered();
   const ImVec2 picture_min = ImGui::GetItemRectMin(), picture_max = ImGui::GetItemRectMax();
+  state.picture_min = picture_min, state.picture_max = picture_max;
+  state.picture_width = tex.picture.width;
   // The splitter under the picture: dragged, the picture grows or shrinks (aspect kept), the
   // timeline and tabs below take the rest.
   ImGui::InvisibleButton("##picture split", ImVec2(avail, 6.0f));
@@ -1329,6 +1823,16 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
     state.picture_share = std::clamp(
         state.picture_share + ImGui::GetIO().MouseDelta.y * aspect / avail, kMinPictureShare, 1.0f);
     state.layout_changed = true;
+  }
+  const ImGuiIO& mouse = ImGui::GetIO();
+  if (picture_hovered && ImGui::IsMouseReleased(ImGuiMouseButton_Left) &&
+      mouse.MouseDragMaxDistanceSqr[0] < mouse.MouseDragThreshold * mouse.MouseDragThreshold &&
+      tex.picture.width > 0) {
+    const ImGuiIO& io = mouse;
+    const double scale = tex.picture.width / static_cast<double>(picture_max.x - picture_min.x);
+    SelectInCamera(
+        runner, state,
+        Vec2((io.MousePos.x - picture_min.x) * scale, (io.MousePos.y - picture_min.y) * scale));
   }
   if (picture_hovered) {
     const ImGuiIO& io = ImGui::GetIO();
@@ -1364,13 +1868,20 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
       DrawEventList(runner, state, avail);
       ImGui::EndTabItem();
     }
+    if (ImGui::BeginTabItem("Inspector", nullptr,
+                            std::exchange(state.open_inspector, false)
+                                ? ImGuiTabItemFlags_SetSelected
+                                : ImGuiTabItemFlags_None)) {
+      DrawInspector(runner, state, tex, avail);
+      ImGui::EndTabItem();
+    }
     ImGui::EndTabBar();
   }
   ImGui::End();
 }
 
 void DrawUi(Runner& runner, GuiState& state, const Textures& tex, int width, int height) {
-  state.overview_version = runner.overview().Read(state.overview_version, state.overview);
+  ReadOverview(runner, state);
   HandleKeys(runner, state);
   DrawControlPanel(runner, state, height);
   DrawViews(runner, state, tex, width, height);

@@ -34,8 +34,10 @@ constexpr std::array<std::vector<float>, 3> Set::*kAxisSeries[] = {
 // Calls f(from's series, to's series) for every per-sample series of a set — the plain ones, each
 // axis's, each joint's (to's per-joint lists sized to from's first). From is const when reading,
 // not when publishing (what is published is cleared).
+// Of the per-link series, link `link`'s only (SessionOverview::kAllLinks: every link's); to's other
+// links are left empty.
 template <typename From, typename F>
-void ForEachSeries(From& from, Set& to, F f) {
+void ForEachSeries(From& from, Set& to, F f, int link = SessionOverview::kAllLinks) {
   for (auto series : kSeries) f(from.*series, to.*series);
   for (auto series : kAxisSeries)
     for (std::size_t a = 0; a < 3; ++a) f((from.*series)[a], (to.*series)[a]);
@@ -43,6 +45,19 @@ void ForEachSeries(From& from, Set& to, F f) {
     (to.*series).resize((from.*series).size());
     for (std::size_t j = 0; j < (from.*series).size(); ++j) f((from.*series)[j], (to.*series)[j]);
   }
+  const auto per_link = [&](auto series) {
+    (to.*series).resize((from.*series).size());
+    for (std::size_t l = 0; l < (from.*series).size(); ++l) {
+      if (link == SessionOverview::kAllLinks || static_cast<int>(l) == link)
+        f((from.*series)[l], (to.*series)[l]);
+      else
+        (to.*series)[l].clear();
+    }
+  };
+  per_link(&Set::link_distance);
+  per_link(&Set::link_force);
+  per_link(&Set::link_mahalanobis);
+  per_link(&Set::link_status);
 }
 
 template <typename T>
@@ -50,7 +65,73 @@ void AppendFrom(const std::vector<T>& from, std::vector<T>& to, std::size_t have
   if (from.size() > have) to.insert(to.end(), from.begin() + static_cast<long>(have), from.end());
 }
 
+int Rank(ContactStatus s) {
+  switch (s) {
+    case ContactStatus::kNone:
+      return 0;
+    case ContactStatus::kCandidate:
+      return 1;
+    case ContactStatus::kRejected:
+      return 2;
+    case ContactStatus::kKinematic:
+      return 3;
+    case ContactStatus::kTorque:
+      return 4;
+    case ContactStatus::kGated:
+      return 5;
+  }
+  return 0;
+}
+
+ContactStatus StatusOf(const FilterTrace::Contact& c) {
+  switch (c.kind) {
+    case ContactKind::kKinematic:
+      return c.gated ? ContactStatus::kGated : ContactStatus::kKinematic;
+    case ContactKind::kTorque:
+      return c.gated ? ContactStatus::kGated : ContactStatus::kTorque;
+    case ContactKind::kRejectedCone:
+    case ContactKind::kRejectedForce:
+      return ContactStatus::kRejected;
+    case ContactKind::kCandidate:
+      return ContactStatus::kCandidate;
+  }
+  return ContactStatus::kNone;
+}
+
 }  // namespace
+
+const char* ContactStatusName(ContactStatus status) {
+  switch (status) {
+    case ContactStatus::kNone:
+      return "none";
+    case ContactStatus::kCandidate:
+      return "candidate";
+    case ContactStatus::kRejected:
+      return "rejected";
+    case ContactStatus::kKinematic:
+      return "kinematic";
+    case ContactStatus::kTorque:
+      return "torque";
+    case ContactStatus::kGated:
+      return "gated";
+  }
+  return "?";
+}
+
+void LinkContacts(const FilterTrace& trace, std::size_t num_links, std::vector<LinkContact>& out) {
+  out.assign(num_links, LinkContact{});
+  for (const FilterTrace::Contact& c : trace.contacts) {
+    if (c.link < 0 || static_cast<std::size_t>(c.link) >= num_links) continue;
+    LinkContact& l = out[static_cast<std::size_t>(c.link)];
+    const ContactStatus s = StatusOf(c);
+    if (!(c.distance >= l.distance)) l.distance = c.distance;  // NaN at first
+    if (Rank(s) > Rank(l.status)) l.status = s;
+    if (std::isnan(l.force)) l.force = 0.0;
+    if (c.kind == ContactKind::kTorque && !c.gated) l.force += c.force_P.norm();
+    const bool constraint = c.kind == ContactKind::kKinematic || c.kind == ContactKind::kTorque;
+    if (constraint && !(c.mahalanobis <= l.mahalanobis)) l.mahalanobis = c.mahalanobis;
+  }
+}
 
 SessionOverview::SessionOverview(const Session& session, const TrackerParams& params,
                                  std::vector<ModalitySet> sets) {
@@ -68,7 +149,7 @@ void SessionOverview::Wait() {
   if (thread_.joinable()) thread_.join();
 }
 
-long SessionOverview::Read(long version, Data& data) const {
+long SessionOverview::Read(long version, Data& data, int link) const {
   std::lock_guard<std::mutex> lock(mutex_);
   data.progress = data_.progress;
   if (version == version_) return version;
@@ -80,9 +161,15 @@ long SessionOverview::Read(long version, Data& data) const {
     const Set& from = data_.sets[i];
     Set& to = data.sets[i];
     AppendFrom(from.events, to.events, to.events.size());
-    ForEachSeries(from, to, [have](const std::vector<float>& source, std::vector<float>& target) {
-      AppendFrom(source, target, have);
-    });
+    ForEachSeries(
+        from, to,
+        [have](const auto& source, auto& target) {
+          if (target.size() < have)  // a link not read before
+            target.assign(source.begin(), source.end());
+          else
+            AppendFrom(source, target, have);
+        },
+        link);
   }
   return version_;
 }
@@ -117,7 +204,7 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         Set& to = data_.sets[i];
         to.events.insert(to.events.end(), from.events.begin(), from.events.end());
         from.events.clear();
-        ForEachSeries(from, to, [](std::vector<float>& source, std::vector<float>& target) {
+        ForEachSeries(from, to, [](auto& source, auto& target) {
           target.insert(target.end(), source.begin(), source.end());
           source.clear();
         });
@@ -131,6 +218,7 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
     constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
     const int every = CheckpointEvery(n);
     int last_frame = -1;
+    std::vector<LinkContact> link_contacts;
     for (int k = 0; k < n; ++k) {
       if (stop_) return;
       player.Step(k);
@@ -170,6 +258,18 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         s.contact_mahalanobis.push_back(
             static_cast<float>(constraints > 0 ? mahalanobis / constraints : kNaN));
         s.contact_force.push_back(static_cast<float>(force));
+        LinkContacts(filter.trace(), player.models().hand.links.size(), link_contacts);
+        const auto per_link = [&](std::vector<std::vector<float>>& series, auto value) {
+          series.resize(link_contacts.size());
+          for (std::size_t l = 0; l < link_contacts.size(); ++l)
+            series[l].push_back(static_cast<float>(value(link_contacts[l])));
+        };
+        per_link(s.link_distance, [](const LinkContact& l) { return l.distance * 1000; });
+        per_link(s.link_force, [](const LinkContact& l) { return l.force; });
+        per_link(s.link_mahalanobis, [](const LinkContact& l) { return l.mahalanobis; });
+        s.link_status.resize(link_contacts.size());
+        for (std::size_t l = 0; l < link_contacts.size(); ++l)
+          s.link_status[l].push_back(static_cast<std::uint8_t>(link_contacts[l].status));
         const auto cov = filter.covariance();
         s.bias.resize(static_cast<std::size_t>(r.biases.size()));
         s.sigma_bias.resize(s.bias.size());

@@ -147,6 +147,13 @@ void DrawContactMarker(cv::Mat& img, const OverlayContact& c, const Vec2& p,
   }
 }
 
+// What the inspector has selected: a ring that no other marker uses, dark then yellow, so that it
+// reads on light and dark backgrounds alike.
+void DrawSelection(cv::Mat& img, const Vec2& p) {
+  cv::circle(img, Fx(p), 11 << kShift, cv::Scalar(20, 20, 20), 4, cv::LINE_AA, kShift);
+  cv::circle(img, Fx(p), 11 << kShift, cv::Scalar(255, 225, 0), 2, cv::LINE_AA, kShift);
+}
+
 // The HUD's lines, wrapped to the picture's width, on darkened boxes from the top-left.
 void DrawGap(cv::Mat& img, const Transform& T_CP, const Intrinsics& K, const OverlayGap& g) {
   Vec2 a, b;
@@ -271,6 +278,7 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
           cv::arrowedLine(img, Fx(p), Fx(q), colour, 2, cv::LINE_AA, kShift, 0.25);
       }
       if (layers.contacts) DrawContactMarker(img, c, p, colour);
+      if (c.selected) DrawSelection(img, p);
     }
     if (layers.features) {
       for (const OverlayFeature& f : e.features) {
@@ -279,6 +287,7 @@ Image8 OverlayPainter::Paint(const OverlayFrame& frame, const OverlayLayers& lay
         cv::circle(img, Fx(f.measured), 4 << kShift, fc, 1, cv::LINE_AA, kShift);
         Line(img, f.predicted + Vec2(-3, 0), f.predicted + Vec2(3, 0), fc, 1);
         Line(img, f.predicted + Vec2(0, -3), f.predicted + Vec2(0, 3), fc, 1);
+        if (f.selected) DrawSelection(img, f.measured);
       }
     }
   }

@@ -929,5 +929,85 @@ TEST(Gui, SplittersMoveAndTheLayoutIsKeptInTheUsersConfiguration) {
   EXPECT_EQ(test::ReadFile(layout), "{\"panel_width\": \"wide\"}");
 }
 
+// The inspector (issue 37): a contact made by a link (replay's events.csv) is, at that time, a
+// fused constraint both in the inspector's table (the GUI's own player) and in its history (the
+// background replay of the whole session): two runs, one answer; before the fingers close, the
+// link has no contact. A click on a row of the visual table selects that measurement, a click on
+// the camera panel where a measurement or a contact is drawn selects it, and the selection is
+// ringed in yellow in the picture. Offscreen, and in a real window under Xvfb when there is one.
+TEST(Gui, TheInspectorSelectsWhatWasClickedAndShowsItsHistory) {
+  INHAND_REQUIRE_GUI();
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("replay " + ShortSession() + " --no-video --out " + (dir / "replay"))
+                .exit_code,
+            0);
+  const EventRow* made = nullptr;
+  const std::vector<EventRow> events = ReadEvents(dir / "replay/events.csv");
+  for (const EventRow& e : events)
+    if (!made && e.set == "jt" && e.kind == "contact_made") made = &e;
+  ASSERT_NE(made, nullptr);
+  const auto run = [&](const std::string& script, const std::string& runner) {
+    std::ofstream(dir / "inspect.script") << script;
+    const test::CommandResult r =
+        test::RunInhand("gui " + ShortSession() + " --script " + (dir / "inspect.script"), runner);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("FAILED"), std::string::npos) << r.output;
+    return r.output;
+  };
+  // Where the selection is drawn, from "selected X (drawn at U V px)".
+  const auto drawn = [](const std::string& output, const std::string& what) {
+    const std::size_t at = output.find("selected " + what + " (drawn at ");
+    double u = NAN, v = NAN;
+    if (at != std::string::npos)
+      std::sscanf(output.c_str() + at + what.size() + 20, "%lf %lf", &u, &v);
+    return std::array<double, 2>{u, v};
+  };
+  char script[1024];
+  std::snprintf(script, sizeof script,
+                "wait-events\nseek %.17g\nwait 2\nselect jt %s\nwait 2\n"
+                "expect selected jt/%s\nexpect contact fused\n"
+                "seek 0.5\nwait 2\nexpect contact none\n"
+                "seek 2.5\nwait 3\nscreenshot %s\n"
+                "select jtf middle_distal\nwait 3\nexpect selected jtf/middle_distal\n"
+                "click 830 428   # the visual table's first row\nwait 3\n"
+                "expect selected jtf/visual:0\n",
+                made->t, made->subject.c_str(), made->subject.c_str(), (dir / "plain.png").c_str());
+  const std::string first = run(script, "env -u DISPLAY");
+  const auto feature = drawn(first, "jtf/visual:0");
+  const auto contact = drawn(first, "jtf/middle_distal");
+  ASSERT_TRUE(std::isfinite(feature[0]) && std::isfinite(contact[0])) << first;
+  std::snprintf(script, sizeof script,
+                "seek 2.5\nwait 3\nclick-camera %.3f %.3f\nwait 3\nexpect selected jtf/visual:0\n"
+                "click-camera %.3f %.3f\nwait 3\nexpect selected jtf/middle_distal\n"
+                "screenshot %s\n",
+                feature[0], feature[1], contact[0], contact[1], (dir / "selected.png").c_str());
+  std::vector<std::string> runners = {"env -u DISPLAY"};
+  if (std::system("command -v xvfb-run > /dev/null 2>&1") == 0)
+    runners.push_back("xvfb-run -a -s '-screen 0 1280x800x24'");
+  for (const std::string& runner : runners) {
+    SCOPED_TRACE(runner);
+    run(script, runner);
+  }
+  // The ring: the picture with the selection differs from the one without only around where the
+  // contact is drawn (the camera panel at the picture's scale: 1920 px shown in the views' width).
+  const Image8 plain = ReadImage(dir / "plain.png"), selected = ReadImage(dir / "selected.png");
+  ExpectInterface(selected);
+  int changed = 0;
+  double cx = 0, cy = 0;
+  for (int y = 25; y < 262; ++y)
+    for (int x = 335; x < 1275; ++x) {
+      const std::uint8_t *a = plain.pixel(x, y), *b = selected.pixel(x, y);
+      if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) > 60)
+        ++changed, cx += x, cy += y;
+    }
+  ASSERT_GT(changed, 20);
+  cx /= changed, cy /= changed;
+  const double scale = (1280 - 330 - 16) / 1920.0;
+  std::printf("ring: %d pixels about (%.1f, %.1f); the contact drawn at (%.1f, %.1f)\n", changed,
+              cx, cy, 338 + contact[0] * scale, 29 + contact[1] * scale);
+  EXPECT_NEAR(cx, 338 + contact[0] * scale, 6.0);
+  EXPECT_NEAR(cy, 29 + contact[1] * scale, 6.0);
+}
+
 }  // namespace
 }  // namespace inhand

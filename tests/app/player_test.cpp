@@ -142,6 +142,49 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
     EXPECT_LT(worst, 1e-3);        // float
     EXPECT_LT(worst_trace, 1e-5);  // float, and estimates.csv's printed digits
   }
+  // Per link (the inspector's history): a link with a fused constraint exactly at the samples
+  // where constraints were applied (at most one link per block), the links' torque-contact forces
+  // summing to the set's, a Mahalanobis distance exactly where a link has a constraint.
+  for (const app::SessionOverview::Set& o : data.sets) {
+    ASSERT_GT(o.link_status.size(), 5u);
+    ASSERT_EQ(o.link_distance.size(), o.link_status.size());
+    ASSERT_EQ(o.link_force.size(), o.link_status.size());
+    ASSERT_EQ(o.link_mahalanobis.size(), o.link_status.size());
+    int touching = 0;
+    for (std::size_t k = 0; k < data.t.size(); ++k) {
+      int fused = 0;
+      double force = 0.0;
+      for (std::size_t l = 0; l < o.link_status.size(); ++l) {
+        const auto status = static_cast<app::ContactStatus>(o.link_status[l][k]);
+        const bool constraint = status == app::ContactStatus::kKinematic ||
+                                status == app::ContactStatus::kTorque ||
+                                status == app::ContactStatus::kGated;
+        fused += status == app::ContactStatus::kKinematic || status == app::ContactStatus::kTorque;
+        EXPECT_EQ(std::isfinite(o.link_mahalanobis[l][k]), constraint) << k << " " << l;
+        EXPECT_EQ(std::isfinite(o.link_distance[l][k]), status != app::ContactStatus::kNone);
+        if (std::isfinite(o.link_force[l][k])) force += o.link_force[l][k];
+      }
+      EXPECT_EQ(fused > 0, o.constraints[k] > 0) << k;
+      EXPECT_LE(fused, o.constraints[k]) << k;
+      EXPECT_NEAR(force, o.contact_force[k], 1e-3 * (1 + force)) << k;
+      touching += fused > 0;
+    }
+    EXPECT_GT(touching, static_cast<int>(data.t.size()) / 3);
+  }
+  // A read of one link's series (what the GUI keeps) has that link's, the same, and no other's.
+  {
+    app::SessionOverview::Data one;
+    overview.Read(-1, one, 3);
+    for (std::size_t i = 0; i < sets.size(); ++i) {
+      const app::SessionOverview::Set &all = data.sets[i], &o = one.sets[i];
+      ASSERT_EQ(o.link_distance.size(), all.link_distance.size());
+      for (std::size_t l = 0; l < o.link_distance.size(); ++l) {
+        EXPECT_EQ(o.link_status[l], l == 3 ? all.link_status[l] : std::vector<std::uint8_t>());
+        EXPECT_EQ(o.link_force[l].size(), l == 3 ? data.t.size() : 0u);
+      }
+      EXPECT_EQ(o.position_error, all.position_error);
+    }
+  }
   // summary.json's per-set means of the counts and the unexplained torque.
   {
     std::ifstream in(dir / "replay/summary.json");

@@ -46,8 +46,11 @@ double LargestSigma(const Mat3& covariance);
 // and the health in words.
 PictureState::Set CaptureSet(const Tracker& tracker, const EstimateRecord& record, double t,
                              const HandModel& hand);
-// A set's estimate as the camera overlay draws it: silhouette, position σ, contacts, matches.
-OverlayEstimate OverlayOf(const std::string& name, const Rgb& colour, const PictureState::Set& set);
+// A set's estimate as the camera overlay draws it: silhouette, position σ, contacts, matches; the
+// contacts of `selected_link` and the visual measurement `selected_visual` (FilterTrace::Visual::
+// id) marked selected (-1: none).
+OverlayEstimate OverlayOf(const std::string& name, const Rgb& colour, const PictureState::Set& set,
+                          int selected_link = -1, int selected_visual = -1);
 
 class FrameComposer {
  public:
@@ -77,6 +80,13 @@ class FrameComposer {
     double elevation = 0.55;  // [rad]
     double distance = 0.42;   // [m]
   } orbit;
+  // What the GUI's inspector selected, ringed in every view: one set's contacts of a link or one
+  // of its visual measurements (FilterTrace::Visual::id); -1: none.
+  struct Selection {
+    int set = -1;
+    int link = -1;
+    int visual = -1;
+  } selection;
 
  private:
   // Every set's estimate with its contacts, and the HUD lines, as the overlays take them.

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
+#include <cstdint>
 #include <map>
 #include <mutex>
 #include <string>
@@ -15,6 +17,20 @@
 #include "inhand/app/player.hpp"
 
 namespace inhand::app {
+
+// What one step's contacts made of one link, from the most telling of its pairs: a gated
+// constraint over a fused one over a rejected torque candidate over a candidate.
+enum class ContactStatus { kNone, kCandidate, kRejected, kKinematic, kTorque, kGated };
+const char* ContactStatusName(ContactStatus status);  // "none", "candidate", ...
+struct LinkContact {
+  ContactStatus status = ContactStatus::kNone;
+  double distance = NAN;     // [m] signed, its nearest pair's (before the update)
+  double force = NAN;        // [N] the torque-confirmed pairs' forces, summed (0: none)
+  double mahalanobis = NAN;  // its constraints' largest (NaN: no constraint)
+};
+// One entry per link of the hand (`out` resized to num_links); links the trace does not name keep
+// kNone. Allocates nothing once `out` has its size.
+void LinkContacts(const FilterTrace& trace, std::size_t num_links, std::vector<LinkContact>& out);
 
 class SessionOverview {
  public:
@@ -53,6 +69,12 @@ class SessionOverview {
     std::array<std::vector<float>, 3> sigma_position_axis, sigma_orientation_axis;  // [mm], [deg]
     // Per joint (the hand's configuration order): its estimated bias and the bias's σ [deg].
     std::vector<std::vector<float>> bias, sigma_bias;
+    // Per link (HandModel::links order): what the step's contact query and update made of it
+    // (LinkContacts): signed distance [mm] and force [N] (NaN: not within the query's reach),
+    // the Mahalanobis distance of its constraint (NaN: none) and its ContactStatus. Read copies
+    // one link's (the rest stay empty): every link's would double what the overview holds.
+    std::vector<std::vector<float>> link_distance, link_force, link_mahalanobis;
+    std::vector<std::vector<std::uint8_t>> link_status;
   };
   struct Data {
     std::vector<double> t;  // [s] the samples replayed
@@ -61,8 +83,10 @@ class SessionOverview {
   };
   // Appends to `data` what was found since it was last read with the version this returned
   // (version < 0: `data` is cleared and gets everything); returns the new version. `progress`
-  // is always brought up to date.
-  long Read(long version, Data& data) const;
+  // is always brought up to date. Of the per-link series, link `link`'s only (-1: none; kAllLinks:
+  // every link's); read another link with version < 0.
+  static constexpr int kAllLinks = -2;
+  long Read(long version, Data& data, int link = kAllLinks) const;
   // Blocks until the whole session is replayed.
   void Wait();
 

@@ -46,12 +46,14 @@ struct OverlayContact {
   Vec3 c_f_P = Vec3::Zero();
   Vec3 normal_P = Vec3::UnitZ();  // link → object
   Vec3 force_P = Vec3::Zero();    // [N]
+  bool selected = false;          // ringed in the selection's colour (the GUI's inspector)
 };
 
 struct OverlayFeature {
   Vec2 measured = Vec2::Zero();   // [px]
   Vec2 predicted = Vec2::Zero();  // [px]
   bool inlier = true;
+  bool selected = false;  // ringed in the selection's colour (the GUI's inspector)
 };
 
 struct OverlayEstimate {
