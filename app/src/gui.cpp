@@ -46,7 +46,15 @@ namespace inhand::app {
 
 namespace {
 
-enum class ActionKind { kTogglePlay, kStepSample, kStepFrame, kSeek, kRecompute, kSaveParams };
+enum class ActionKind {
+  kTogglePlay,
+  kStepSample,
+  kStepFrame,
+  kSeek,
+  kRecompute,
+  kSaveParams,
+  kCompare  // value 0: B is the panel's parameters, 1: the parameter file's
+};
 struct Action {
   ActionKind kind;
   int value = 0;
@@ -69,8 +77,15 @@ struct GuiState {
   bool pictures_dirty = true;
   // The whole session's events and series (SessionOverview), and how far they are known.
   SessionOverview::Data overview;
-  long overview_version = -1;     // -1: copy whatever the overview has
-  int overview_link = -1;         // the link whose series `overview` holds (the inspected one)
+  long overview_version = -1;  // -1: copy whatever the overview has
+  int overview_link = -1;      // the link whose series `overview` holds (the inspected one)
+  // The A/B comparison: the session replayed with parameters B (Runner::compare), what B is, and
+  // the quantity the Compare tab plots (CompareQuantity).
+  SessionOverview::Data compare;
+  long compare_version = -1;
+  std::string compare_what;
+  int compare_quantity = 0;
+  bool open_compare = false;      // bring the Compare tab to the front
   bool timeline_contacts = true;  // contact events on the timeline and in [ ] jumps
   int error_axis = 0;  // the Errors tab: 0 norms and largest axes, 1-3 the object frame's x, y, z
   int bias_joint = 0;  // the Biases and counts tab's joint (configuration order)
@@ -222,6 +237,14 @@ class Runner {
     const int target = last_frame_ + 1;
     while (next_ < session_.num_samples() && last_frame_ < target) StepTo(next_);
   }
+  // The A/B comparison: the whole session replayed again, in the background, with parameters B;
+  // A is what the views show (the player's parameters). Null until started.
+  void StartCompare(const TrackerParams& b) {
+    compare_.reset();  // stops the old one first
+    compare_ = std::make_unique<SessionOverview>(session_, b, player_->sets());
+    state_.compare_version = -1;
+  }
+  SessionOverview* compare() { return compare_.get(); }
   Image8 Picture() {
     composer_->orbit = state_.orbit;
     composer_->selection = {
@@ -255,6 +278,7 @@ class Runner {
   std::unique_ptr<SessionPlayer> player_;
   std::unique_ptr<FrameComposer> composer_;
   std::unique_ptr<SessionOverview> overview_;
+  std::unique_ptr<SessionOverview> compare_;
   int next_ = 0;
   int last_frame_ = -1;
   // Keyed by the sample the run resumes at. A checkpoint holds the last camera and virtual
@@ -285,6 +309,8 @@ void ReadOverview(Runner& runner, GuiState& state) {
     state.overview_version = -1, state.overview_link = state.inspect_link;
   state.overview_version =
       runner.overview().Read(state.overview_version, state.overview, state.overview_link);
+  if (runner.compare())
+    state.compare_version = runner.compare()->Read(state.compare_version, state.compare, -1);
 }
 
 // The set the inspector lists: the one chosen, else the last (the richest: it is drawn last and
@@ -383,6 +409,28 @@ void ApplyActions(Runner& runner, GuiState& state) {
           runner.RestartOverview();
           runner.StepTo(at);
           state.status = "recomputed with the new parameters";
+        } catch (const InputError& e) {
+          state.status = e.what();
+        }
+        break;
+      }
+      case ActionKind::kCompare: {
+        try {
+          TrackerParams b = state.params;
+          std::string what = "the panel's parameters";
+          if (a.value == 1) {
+            std::ifstream in(state.params_path);
+            if (!in) throw InputError(std::string(state.params_path) + ": cannot read");
+            std::stringstream text;
+            text << in.rdbuf();
+            b = TrackerParamsFromJson(text.str(), state.params_path);
+            what = state.params_path;
+          }
+          b.Validate("B parameters");
+          runner.StartCompare(b);
+          state.compare_what = what;
+          state.open_compare = true;
+          state.status = "comparing with " + what + " (the Compare tab)";
         } catch (const InputError& e) {
           state.status = e.what();
         }
@@ -502,6 +550,10 @@ void DrawControlPanel(Runner& runner, GuiState& state, int height) {
   if (ImGui::Button("Recompute from the start")) state.actions.push_back({ActionKind::kRecompute});
   ImGui::InputText("file", state.params_path, sizeof(state.params_path));
   if (ImGui::Button("Save parameters")) state.actions.push_back({ActionKind::kSaveParams});
+  // A/B: the views stay as they are (A); B is replayed in the background.
+  if (ImGui::Button("Compare: these")) state.actions.push_back({ActionKind::kCompare, 0});
+  ImGui::SameLine();
+  if (ImGui::Button("Compare: the file")) state.actions.push_back({ActionKind::kCompare, 1});
   if (!state.status.empty()) ImGui::TextWrapped("%s", state.status.c_str());
   ImGui::PopItemWidth();
   ImGui::End();
@@ -757,6 +809,7 @@ struct PlotSpec {
   double line = NAN;                    // a dashed threshold
   double cap = NAN;
   Series envelope = nullptr;  // drawn as ± this about zero, faint, in each set's colour
+  const SessionOverview::Data* data = nullptr;  // null: the overview (A)
 };
 
 void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size);
@@ -772,7 +825,7 @@ void DrawPlot(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size
 void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size) {
   const Session& s = runner.session();
   const SessionPlayer& p = runner.player();
-  const SessionOverview::Data& data = state.overview;
+  const SessionOverview::Data& data = spec.data ? *spec.data : state.overview;
   constexpr float kLeft = 52.0f, kTop = 18.0f, kBottom = 16.0f, kRight = 6.0f;
   const ImVec2 origin = ImGui::GetCursorScreenPos();
   ImGui::InvisibleButton("plot", size);
@@ -1306,6 +1359,153 @@ void DrawInspector(Runner& runner, GuiState& state, const Textures& tex, float a
   }
 }
 
+// What the Compare tab can set side by side: one per-sample series of each set.
+struct CompareQuantity {
+  const char* name;  // the script's word
+  const char* title;
+  const char* unit;
+  std::vector<float> SessionOverview::Set::*series;
+  bool truth;  // needs ground truth
+};
+constexpr CompareQuantity kCompareQuantities[] = {
+    {"position_error", "position error", "mm", &SessionOverview::Set::position_error, true},
+    {"orientation_error", "orientation error", "deg", &SessionOverview::Set::orientation_error,
+     true},
+    {"sigma_position", "position sigma, largest axis", "mm", &SessionOverview::Set::sigma_position,
+     false},
+    {"sigma_orientation", "orientation sigma, largest axis", "deg",
+     &SessionOverview::Set::sigma_orientation, false},
+    {"nees", "NEES", "", &SessionOverview::Set::nees, true},
+    {"penetration", "deepest link inside the estimate", "mm", &SessionOverview::Set::penetration,
+     false},
+};
+constexpr int kNumCompareQuantities = sizeof kCompareQuantities / sizeof kCompareQuantities[0];
+
+// B − A of one series, sample by sample over the samples both have replayed, into `out` (its
+// progress B's while B runs, so that the plot shades what is not known yet).
+void CompareDifference(const SessionOverview::Data& a, const SessionOverview::Data& b,
+                       std::vector<float> SessionOverview::Set::*m, SessionOverview::Data& out) {
+  const std::size_t n = std::min(a.t.size(), b.t.size());
+  out.t.assign(a.t.begin(), a.t.begin() + static_cast<long>(n));
+  out.progress = b.progress.done ? a.progress : b.progress;
+  if (!a.progress.done && a.progress.t < out.progress.t) out.progress = a.progress;
+  out.sets.resize(std::min(a.sets.size(), b.sets.size()));
+  for (std::size_t i = 0; i < out.sets.size(); ++i) {
+    const std::vector<float>&x = a.sets[i].*m, &y = b.sets[i].*m;
+    std::vector<float>& d = out.sets[i].*m;
+    d.resize(std::min({n, x.size(), y.size()}));
+    for (std::size_t k = 0; k < d.size(); ++k) d[k] = y[k] - x[k];
+  }
+}
+
+// The largest |B − A| of set i's series (NaN where either is NaN: left out; 0 when nothing is
+// known).
+double LargestDifference(const SessionOverview::Data& diff, std::size_t i,
+                         std::vector<float> SessionOverview::Set::*m) {
+  double worst = 0.0;
+  if (i < diff.sets.size())
+    for (const float v : diff.sets[i].*m)
+      if (std::isfinite(v)) worst = std::max(worst, static_cast<double>(std::abs(v)));
+  return worst;
+}
+
+// A's and B's mean of a series over the samples both have, each over its finite values.
+std::pair<double, double> CompareMeans(const SessionOverview::Data& a,
+                                       const SessionOverview::Data& b, std::size_t i,
+                                       std::vector<float> SessionOverview::Set::*m) {
+  const std::size_t n = std::min(a.t.size(), b.t.size());
+  const auto mean = [n, i, m](const SessionOverview::Data& d) {
+    double sum = 0.0;
+    long count = 0;
+    if (i < d.sets.size())
+      for (std::size_t k = 0; k < std::min(n, (d.sets[i].*m).size()); ++k)
+        if (std::isfinite((d.sets[i].*m)[k])) sum += (d.sets[i].*m)[k], ++count;
+    return count ? sum / count : NAN;
+  };
+  return {mean(a), mean(b)};
+}
+
+// A/B: the session as the views show it (A) beside a replay with other parameters (B: the
+// panel's, or a file's), with B's progress while it runs in the background; per set, the means of
+// the chosen quantity and the largest difference; plots of A, of B and of B − A over the shared
+// window.
+void DrawCompare(Runner& runner, GuiState& state, float avail) {
+  const SessionPlayer& p = runner.player();
+  if (!runner.compare()) {
+    ImGui::TextWrapped(
+        "Replays the whole session again in the background with other parameters (B) and sets "
+        "it beside what the views show (A). Edit the parameters in the panel and press "
+        "'Compare: these', or name a parameter file (as 'Save parameters' writes and replay "
+        "--params reads) and press 'Compare: the file'.");
+    return;
+  }
+  const SessionOverview::Data &a = state.overview, &b = state.compare;
+  if (!b.progress.error.empty()) {
+    ImGui::TextWrapped("B failed: %s", b.progress.error.c_str());
+    return;
+  }
+  ImGui::Text("A: the parameters the views show. B: %s. B replayed %.0f %% (to %.2f s)%s",
+              state.compare_what.c_str(), 100 * b.progress.share, b.progress.t,
+              b.progress.done ? ", done" : "...");
+  const bool truth = runner.session().has_groundtruth();
+  std::vector<int> choices;
+  for (int q = 0; q < kNumCompareQuantities; ++q)
+    if (truth || !kCompareQuantities[q].truth) choices.push_back(q);
+  if (std::find(choices.begin(), choices.end(), state.compare_quantity) == choices.end())
+    state.compare_quantity = choices.front();
+  const CompareQuantity& q = kCompareQuantities[state.compare_quantity];
+  ImGui::SetNextItemWidth(220);
+  if (ImGui::BeginCombo("quantity", q.title)) {
+    for (const int c : choices)
+      if (ImGui::Selectable(kCompareQuantities[c].title, c == state.compare_quantity))
+        state.compare_quantity = c;
+    ImGui::EndCombo();
+  }
+  static SessionOverview::Data diff;
+  CompareDifference(a, b, q.series, diff);
+  const ImGuiTableFlags flags =
+      ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp;
+  if (ImGui::BeginTable("compare", 5, flags, ImVec2(avail, 0))) {
+    ImGui::TableSetupColumn("set");
+    ImGui::TableSetupColumn("mean A");
+    ImGui::TableSetupColumn("mean B");
+    ImGui::TableSetupColumn("B - A");
+    ImGui::TableSetupColumn("largest |B - A|");
+    ImGui::TableHeadersRow();
+    for (std::size_t i = 0; i < p.sets().size(); ++i) {
+      const auto [ma, mb] = CompareMeans(a, b, i, q.series);
+      const Rgb& c = p.sets()[i].colour;
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextColored(ImVec4(c.r / 255.f, c.g / 255.f, c.b / 255.f, 1.f), "%s",
+                         p.sets()[i].name.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%.3g %s", ma, q.unit);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.3g %s", mb, q.unit);
+      ImGui::TableNextColumn();
+      ImGui::Text("%+.3g %s", mb - ma, q.unit);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.3g %s", LargestDifference(diff, i, q.series), q.unit);
+    }
+    ImGui::EndTable();
+  }
+  const auto series = [m = q.series](const SessionOverview::Set& s) -> const std::vector<float>& {
+    return s.*m;
+  };
+  std::vector<PlotSpec> plots = {{"##ca", std::string("A: ") + q.title, q.unit, series},
+                                 {"##cb", std::string("B: ") + q.title, q.unit, series},
+                                 {"##cd", std::string("B - A: ") + q.title, q.unit, series}};
+  plots[1].data = &b;
+  plots[2].data = &diff;
+  plots[2].line = 0.0;
+  const ImVec2 size((avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3, 150);
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    if (i > 0) ImGui::SameLine();
+    DrawPlot(runner, state, plots[i], size);
+  }
+}
+
 // Every event of every set in time order, filtered by text; a click seeks to it.
 void DrawEventList(Runner& runner, GuiState& state, float avail) {
   const SessionPlayer& p = runner.player();
@@ -1535,6 +1735,11 @@ class GuiScript {
         if (!(words >> c.a >> c.b)) fail("click-camera U V (the camera image's pixels)");
       } else if (c.verb == "select") {
         if (!(words >> c.text >> c.text2)) fail("select SET LINK (names)");
+      } else if (c.verb == "param") {
+        if (!(words >> c.text >> c.text2)) fail("param NAME VALUE (params.json's names)");
+      } else if (c.verb == "compare") {
+        words >> c.text;  // optional: B's parameter file
+      } else if (c.verb == "wait-compare") {
       } else if (c.verb == "expect") {
         std::string what;
         words >> what;
@@ -1565,6 +1770,15 @@ class GuiScript {
             fail(
                 "expect contact STATUS (none, candidate, rejected, kinematic, torque, gated, or "
                 "fused: kinematic or torque)");
+        } else if (what == "difference") {
+          c.verb = "expect-difference";
+          bool known = false;
+          if (words >> c.text >> c.text2 >> c.a >> c.b)
+            for (const CompareQuantity& q : kCompareQuantities) known = known || c.text2 == q.name;
+          if (!known)
+            fail(
+                "expect difference SET QUANTITY MIN MAX (position_error, orientation_error, "
+                "sigma_position, sigma_orientation, nees or penetration)");
         } else if (what == "events") {
           c.verb = "expect-events";
           if (!(words >> c.text >> c.a)) fail("expect events KIND MIN");
@@ -1573,12 +1787,12 @@ class GuiScript {
             known = known || c.text == EventKindName(static_cast<EventKind>(k));
           if (!known) fail("an event kind of FORMAT.md, or any");
         } else {
-          fail("expect time, window, panel, picture, selected, contact or events ...");
+          fail("expect time, window, panel, picture, selected, contact, difference or events ...");
         }
       } else {
         fail(
             "wait, wait-events, seek, key, press, click, click-camera, scroll, drag, select, "
-            "screenshot or expect");
+            "param, compare, wait-compare, screenshot or expect");
       }
       script.commands_.push_back(c);
     }
@@ -1647,6 +1861,65 @@ class GuiScript {
         state.inspect_set = set, state.inspect_link = link, state.inspect_visual = -1;
         state.open_inspector = state.pictures_dirty = true;
         return;
+      }
+      if (c.verb == "param") {
+        // Through params.json's own reader: a name it lacks or a value out of range fails here.
+        try {
+          nlohmann::json j = nlohmann::json::parse(TrackerParamsToJson(state.params));
+          nlohmann::json* at = &j;
+          std::istringstream path(c.text);
+          for (std::string key; std::getline(path, key, '.');) {
+            if (!at->is_object() || !at->contains(key))
+              throw InputError("no parameter '" + c.text + "'");
+            at = &(*at)[key];
+          }
+          if (at->is_boolean())
+            *at = c.text2 == "true";
+          else if (at->is_number_integer())
+            *at = std::stol(c.text2);
+          else
+            *at = std::stod(c.text2);
+          state.params = TrackerParamsFromJson(j.dump(), where + "param");
+          Report(where, true, c.text + " = " + c.text2);
+        } catch (const std::exception& e) {
+          Report(where, false, e.what());
+        }
+        continue;
+      }
+      if (c.verb == "compare") {
+        if (!c.text.empty())
+          std::snprintf(state.params_path, sizeof state.params_path, "%s", c.text.c_str());
+        state.actions.push_back({ActionKind::kCompare, c.text.empty() ? 0 : 1});
+        return;
+      }
+      if (c.verb == "wait-compare") {
+        if (runner.compare()) runner.compare()->Wait();
+        ReadOverview(runner, state);
+        continue;
+      }
+      if (c.verb == "expect-difference") {
+        runner.overview().Wait();
+        if (runner.compare()) runner.compare()->Wait();
+        ReadOverview(runner, state);
+        const SessionPlayer& p = runner.player();
+        std::size_t set = p.sets().size();
+        for (std::size_t i = 0; i < p.sets().size(); ++i)
+          if (p.sets()[i].name == c.text) set = i;
+        const CompareQuantity* q = nullptr;
+        for (const CompareQuantity& candidate : kCompareQuantities)
+          if (c.text2 == candidate.name) q = &candidate;
+        if (!runner.compare() || set == p.sets().size() || !q) {
+          Report(where, false, runner.compare() ? "no set " + c.text : "no comparison running");
+          continue;
+        }
+        SessionOverview::Data diff;
+        CompareDifference(state.overview, state.compare, q->series, diff);
+        const double d = LargestDifference(diff, set, q->series);
+        Report(where, d >= c.a && d <= c.b && diff.t.size() == state.overview.t.size(),
+               "largest |B - A| of " + c.text + " " + c.text2 + " " + FormatDouble(d) + " over " +
+                   std::to_string(diff.t.size()) + " samples, expected in [" + FormatDouble(c.a) +
+                   ", " + FormatDouble(c.b) + "]");
+        continue;
       }
       if (c.verb == "expect-selected") {
         Vec2 pixel;
@@ -1873,6 +2146,12 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
                                 ? ImGuiTabItemFlags_SetSelected
                                 : ImGuiTabItemFlags_None)) {
       DrawInspector(runner, state, tex, avail);
+      ImGui::EndTabItem();
+    }
+    if (ImGui::BeginTabItem("Compare", nullptr,
+                            std::exchange(state.open_compare, false) ? ImGuiTabItemFlags_SetSelected
+                                                                     : ImGuiTabItemFlags_None)) {
+      DrawCompare(runner, state, avail);
       ImGui::EndTabItem();
     }
     ImGui::EndTabBar();

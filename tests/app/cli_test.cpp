@@ -1009,5 +1009,63 @@ TEST(Gui, TheInspectorSelectsWhatWasClickedAndShowsItsHistory) {
   EXPECT_NEAR(cy, 29 + contact[1] * scale, 6.0);
 }
 
+// A/B (issue 37): the session replayed in the background with parameters B beside what the views
+// show (A). With B = A every set's series are the same, sample for sample (the replay is
+// deterministic); with a larger torque threshold (force_min, torque contacts only) the joint-only
+// set j stays the same and the sets with torques change; B from a file written by replay
+// (params.json) with that threshold gives the same. A parameter the file format lacks fails the
+// check by name.
+TEST(Gui, CompareReplaysTheSessionWithOtherParametersBesideIt) {
+  INHAND_REQUIRE_GUI();
+  test::TempDir dir;
+  ASSERT_EQ(test::RunInhand("replay " + ShortSession() + " --no-video --modalities j --out " +
+                            (dir / "replay"))
+                .exit_code,
+            0);
+  Json params = Json::parse(test::ReadFile(dir / "replay/params.json"));
+  params["force_min"] = 6.0;
+  std::ofstream(dir / "b.json") << params.dump(2);
+  std::ofstream(dir / "compare.script")
+      << "compare\nwait 2\nwait-compare\n"
+         "expect difference j position_error 0 0\nexpect difference jt position_error 0 0\n"
+         "expect difference jtf orientation_error 0 0\nexpect difference jta nees 0 0\n"
+         "param force_min 6\ncompare\nwait 2\nwait-compare\n"
+         "expect difference j position_error 0 0\nexpect difference j nees 0 0\n"
+         "expect difference jt position_error 0.01 1000\n"
+         "expect difference jta position_error 0.01 1000\n"
+         "param force_min 2\ncompare "
+      << (dir / "b.json")
+      << "\nwait 2\nwait-compare\n"
+         "expect difference j position_error 0 0\n"
+         "expect difference jt position_error 0.01 1000\n"
+         "seek 3\nwait 3\nscreenshot "
+      << (dir / "compare.png") << "\n";
+  const test::CommandResult r = test::RunInhand(
+      "gui " + ShortSession() + " --script " + (dir / "compare.script"), "env -u DISPLAY");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("FAILED"), std::string::npos) << r.output;
+  std::size_t oks = 0;
+  for (std::size_t at = 0; (at = r.output.find(": ok: ", at)) != std::string::npos; ++at) ++oks;
+  EXPECT_EQ(oks, 12u) << r.output;
+  // The file's B is the panel's B: the same differences.
+  const auto largest = [&](int line) {
+    const std::string at = "compare.script:" + std::to_string(line) + ": ok: largest |B - A| of ";
+    const std::size_t from = r.output.find(at);
+    return from == std::string::npos
+               ? std::string("?")
+               : r.output.substr(from + at.size(), r.output.find(" over", from) - from - at.size());
+  };
+  EXPECT_EQ(largest(14), largest(21));
+  EXPECT_NE(largest(14), "?");
+  ExpectInterface(ReadImage(dir / "compare.png"));
+  std::ofstream(dir / "bad.script") << "param no_such_thing 3\n";
+  const test::CommandResult bad = test::RunInhand(
+      "gui " + ShortSession() + " --script " + (dir / "bad.script"), "env -u DISPLAY");
+  EXPECT_EQ(bad.exit_code, 1) << bad.output;
+  EXPECT_NE(bad.output.find("bad.script:1: FAILED: no parameter 'no_such_thing'"),
+            std::string::npos)
+      << bad.output;
+}
+
 }  // namespace
 }  // namespace inhand
