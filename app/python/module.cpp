@@ -799,7 +799,13 @@ PYBIND11_MODULE(inhand, m) {
           "T_PO, the object in the palm frame (4x4).")
       .def(
           "covariance", [](PyTracker& t) { return t.tracker().covariance(); },
-          "Covariance of (position, orientation, joint biases), 6 + joints square.")
+          "The filter's covariance of (position, orientation, joint biases), 6 + joints square.")
+      .def(
+          "claimed_pose_covariance",
+          [](PyTracker& t) -> Mat6 { return t.tracker().claimed_pose_covariance(); },
+          "The covariance of (position, orientation) the estimate claims (6x6): the filter's, its "
+          "position widened by what the health knows (a pressing finger in the air, a link inside "
+          "the object). What sigma, NEES and the HUD report.")
       .def(
           "biases", [](PyTracker& t) -> Eigen::VectorXd { return t.tracker().biases(); },
           "Joint position biases [rad].")

@@ -115,7 +115,7 @@ std::string LiveTracking::OnJointState(const JointStateMsg& m, const std::string
     p.set = i;
     p.stamp_ns = stamp;
     p.T_PO = tracker.T_PO();
-    p.covariance = tracker.covariance().topLeftCorner<6, 6>();
+    p.covariance = tracker.claimed_pose_covariance();
     p.health = tracker.health();
     p.health_changed = fused == 0 || !(p.health == last_health_[i]);
     last_health_[i] = p.health;

@@ -14,7 +14,7 @@ void RecordContacts(const FilterTrace& trace, EstimateRecord& r) {
 void RecordTrackerState(const Tracker& tracker, EstimateRecord& r) {
   const FilterTrace& trace = tracker.trace();
   r.T_PO = tracker.T_PO();
-  const auto& P = tracker.filter().covariance();
+  const Mat6 P = tracker.claimed_pose_covariance();
   r.sigma_position = P.diagonal().head<3>().cwiseSqrt();
   r.sigma_orientation = P.diagonal().segment<3>(3).cwiseSqrt();
   r.biases = tracker.biases();

@@ -66,7 +66,7 @@ PictureState::Set CaptureSet(const Tracker& tracker, const EstimateRecord& recor
   const Filter& f = tracker.filter();
   PictureState::Set set;
   set.record = record;
-  set.pose_covariance = f.covariance().topLeftCorner<6, 6>();
+  set.pose_covariance = tracker.claimed_pose_covariance();
   set.contacts = f.trace().contacts;
   set.visual = f.trace().visual;
   const TrackerStats stats = tracker.stats();

@@ -200,10 +200,9 @@ void SessionPlayer::StepSet(std::size_t i, int k, std::size_t first_frame, std::
     }
   }
   RecordTrackerState(tracker, r);
-  const auto& P = tracker.filter().covariance();
   tracker.TakeEvents(r.events);
   if (TruthCovers(t))
-    CompareWithTruth(session_.GroundTruthAt(t), P.topLeftCorner<6, 6>(), r);
+    CompareWithTruth(session_.GroundTruthAt(t), tracker.claimed_pose_covariance(), r);
   else
     r = WithoutTruth(r);
   WatchNees(r);

@@ -279,7 +279,7 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
           s.sigma_bias[at].push_back(
               static_cast<float>(std::sqrt(std::max(0.0, cov(6 + j, 6 + j))) * 180 / M_PI));
         }
-        const Mat6 P = filter.covariance().topLeftCorner<6, 6>();
+        const Mat6 P = player.tracker(i).claimed_pose_covariance();
         const Mat3 R = r.T_PO.linear();
         const Vec3 var_p = (R.transpose() * P.topLeftCorner<3, 3>() * R).diagonal();
         const Vec3 var_o = (R.transpose() * P.bottomRightCorner<3, 3>() * R).diagonal();

@@ -91,7 +91,7 @@ class TrackerFromPython(unittest.TestCase):
             rows = f.rows[set_name]
             bias_columns = [c for c in rows[0] if c.startswith("bias:")]
             self.assertEqual(len(rows), len(f.session.t))
-            worst = [0.0, 0.0, 0.0]
+            worst = [0.0, 0.0, 0.0, 0.0]
 
             def compare(k, tracker):
                 row = rows[k]
@@ -103,12 +103,17 @@ class TrackerFromPython(unittest.TestCase):
                 worst[0] = max(worst[0], np.abs(T[:3, 3] - p).max())
                 worst[1] = max(worst[1], np.abs(T[:3, :3] - R).max())
                 worst[2] = max(worst[2], np.abs(tracker.biases() - b).max())
+                # replay's sigma is the claimed covariance's (relative: the CSV's printed digits)
+                C = tracker.claimed_pose_covariance()
+                sigma = np.array([float(row[c]) for c in ("sigma_px", "sigma_py", "sigma_pz")])
+                worst[3] = max(worst[3], np.abs(np.sqrt(np.diag(C)[:3]) / sigma - 1).max())
 
             tracker = track(f, set_name, each=compare)
             with self.subTest(set=set_name):
                 self.assertLess(worst[0], 1e-12, "position [m]")
                 self.assertLess(worst[1], 1e-12, "rotation")
                 self.assertLess(worst[2], 1e-12, "biases [rad]")
+                self.assertLess(worst[3], 1e-6, "claimed sigma")
                 stats = tracker.stats()
                 self.assertEqual(stats["samples"], len(f.session.t))
                 if set_name in ("jta", "jtf"):

@@ -284,6 +284,47 @@ void ComparePressCheck(const HandModel& hand, const ObjectModel& object, const V
   EXPECT_GT(near, 20);
 }
 
+// What an estimate claims (ClaimedPoseCovariance): a set inconsistent or lost because a pressing
+// finger is g in the air, or a link d inside, claims at least that σ on every position axis, so
+// that an error of that size along any direction has a NEES below 1 however small the filter's own
+// σ; every other state and cause claims the filter's covariance, bit for bit.
+TEST(ClaimedCovariance, WidensThePositionByTheDistanceTheHealthSees) {
+  Mat6 P = Mat6::Zero();
+  P.diagonal() << 1e-6, 2e-6, 3e-6, 1e-4, 2e-4, 3e-4;  // σ 1-1.7 mm, 0.6-1 deg
+  P(0, 1) = P(1, 0) = 5e-7;
+  P(3, 4) = P(4, 3) = 2e-5;
+  for (const HealthState state : {HealthState::kInconsistent, HealthState::kLost})
+    for (const HealthCause cause : {HealthCause::kPressingInAir, HealthCause::kPenetration}) {
+      const Health h{state, cause, 0.034, 3, 1.0};
+      EXPECT_DOUBLE_EQ(HealthPositionSigma(h), 0.034);
+      const Mat6 C = ClaimedPoseCovariance(P, h);
+      Mat6 expected = P;
+      expected.topLeftCorner<3, 3>() += 0.034 * 0.034 * Mat3::Identity();
+      EXPECT_EQ(C, expected);
+      std::mt19937 rng(7);
+      std::normal_distribution<double> normal;
+      for (int i = 0; i < 100; ++i) {
+        const Vec3 u = Vec3(normal(rng), normal(rng), normal(rng)).normalized();
+        Vec6 e = Vec6::Zero();
+        e.head<3>() = 0.034 * u;
+        EXPECT_LT(e.dot(C.ldlt().solve(e)), 1.0);
+        EXPECT_GT(e.dot(P.ldlt().solve(e)), 300.0);  // what the filter alone would claim
+      }
+    }
+  // No distance to add: the filter's own.
+  const Health quiet[] = {
+      {HealthState::kOk, HealthCause::kNone, 0.0, -1, 0.0},
+      {HealthState::kUncertain, HealthCause::kWideSigma, 0.02, 0, 0.0},
+      {HealthState::kUncertain, HealthCause::kPressingInAir, 0.02, 3, 0.0},  // not sustained yet
+      {HealthState::kInconsistent, HealthCause::kTagsElsewhere, 0.0, -1, 0.0},
+      {HealthState::kInconsistent, HealthCause::kVisionDisagrees, 0.8, -1, 0.0},
+      {HealthState::kLost, HealthCause::kFeaturesLost, 0.0, -1, 0.0}};
+  for (const Health& h : quiet) {
+    EXPECT_EQ(HealthPositionSigma(h), 0.0);
+    EXPECT_EQ(ClaimedPoseCovariance(P, h), P);
+  }
+}
+
 TEST(PressCheck, AgreesWithTheExhaustiveQueryOnTheProjectsHand) {
   const HandModel hand =
       LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});

@@ -492,6 +492,9 @@ const TrackerParams& Tracker::params() const { return impl_->params; }
 
 const Health& Tracker::health() const { return impl_->health.health(); }
 const PressEvidence& Tracker::press_evidence() const { return impl_->health.press(); }
+Mat6 Tracker::claimed_pose_covariance() const {
+  return ClaimedPoseCovariance(impl_->filter.covariance().topLeftCorner<6, 6>(), health());
+}
 
 void Tracker::TakeEvents(std::vector<TrackerEvent>& out) {
   std::lock_guard<std::mutex> lock(impl_->mutex);

@@ -52,6 +52,19 @@ const char* HealthCauseName(HealthCause cause) {
   return "?";
 }
 
+double HealthPositionSigma(const Health& h) {
+  if (h.state != HealthState::kInconsistent && h.state != HealthState::kLost) return 0.0;
+  if (h.cause != HealthCause::kPressingInAir && h.cause != HealthCause::kPenetration) return 0.0;
+  return std::isfinite(h.value) ? std::abs(h.value) : 0.0;
+}
+
+Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health) {
+  const double s = HealthPositionSigma(health);
+  Mat6 claimed = P;
+  claimed.topLeftCorner<3, 3>().diagonal().array() += s * s;
+  return claimed;
+}
+
 std::string HealthMessage(const Health& h, const HandModel& hand) {
   const std::string link = h.subject >= 0 && h.subject < static_cast<int>(hand.links.size())
                                ? hand.links[static_cast<std::size_t>(h.subject)].name

@@ -230,6 +230,10 @@ class Tracker {
   // torques check every HealthParams::press_period that the fingers the torques say press are near
   // the estimated object; press_evidence() is that check's last finding.
   const Health& health() const;
+  // The pose covariance (δp, δθ) the estimate claims: the filter's, widened by what its health
+  // knows (ClaimedPoseCovariance: a pressing finger in the air or a link inside the object at
+  // distance d adds d² to the position's variance on every axis). What σ, NEES and the HUD report.
+  Mat6 claimed_pose_covariance() const;
   const PressEvidence& press_evidence() const;
   const Modalities& modalities() const;
   const TrackerParams& params() const;

@@ -17,6 +17,7 @@
 
 #include "inhand/core/contact.hpp"
 #include "inhand/core/hand_model.hpp"
+#include "inhand/filter/contact_model.hpp"
 #include "inhand/filter/plausibility.hpp"
 
 namespace inhand {
@@ -61,6 +62,16 @@ struct Health {
 // One line for people: "inconsistent since 1.20 s: thumb_tip presses but the object is 23.1 mm
 // from it". Allocates (the HUD, logs; not the joint-rate path).
 std::string HealthMessage(const Health& health, const HandModel& hand);
+
+// What an estimate may claim. A set that is inconsistent or lost because a finger the torques say
+// presses is g from the estimated object, or because a link lies d inside it, knows its estimate is
+// about that far off; its claim must not be tighter. HealthPositionSigma is that distance [m]
+// (g or d), 0 for every other state and cause (they carry no distance). ClaimedPoseCovariance is
+// the filter's pose covariance (δp, δθ) with HealthPositionSigma² added to the position's variance
+// along every axis: what the tracker reports (σ, NEES, the HUD, exports). The filter's own
+// covariance, and so every estimate, stays as it was.
+double HealthPositionSigma(const Health& health);
+Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health);
 
 // Thresholds, with units; why each default is what it is in docs/evaluation.md ("Health").
 struct HealthParams {
