@@ -65,24 +65,6 @@ void AppendFrom(const std::vector<T>& from, std::vector<T>& to, std::size_t have
   if (from.size() > have) to.insert(to.end(), from.begin() + static_cast<long>(have), from.end());
 }
 
-int Rank(ContactStatus s) {
-  switch (s) {
-    case ContactStatus::kNone:
-      return 0;
-    case ContactStatus::kCandidate:
-      return 1;
-    case ContactStatus::kRejected:
-      return 2;
-    case ContactStatus::kKinematic:
-      return 3;
-    case ContactStatus::kTorque:
-      return 4;
-    case ContactStatus::kGated:
-      return 5;
-  }
-  return 0;
-}
-
 ContactStatus StatusOf(const FilterTrace::Contact& c) {
   switch (c.kind) {
     case ContactKind::kKinematic:
@@ -125,7 +107,7 @@ void LinkContacts(const FilterTrace& trace, std::size_t num_links, std::vector<L
     LinkContact& l = out[static_cast<std::size_t>(c.link)];
     const ContactStatus s = StatusOf(c);
     if (!(c.distance >= l.distance)) l.distance = c.distance;  // NaN at first
-    if (Rank(s) > Rank(l.status)) l.status = s;
+    if (s > l.status) l.status = s;                            // the enum is in that order
     if (std::isnan(l.force)) l.force = 0.0;
     if (c.kind == ContactKind::kTorque && !c.gated) l.force += c.force_P.norm();
     const bool constraint = c.kind == ContactKind::kKinematic || c.kind == ContactKind::kTorque;

@@ -19,7 +19,8 @@
 namespace inhand::app {
 
 // What one step's contacts made of one link, from the most telling of its pairs: a gated
-// constraint over a fused one over a rejected torque candidate over a candidate.
+// constraint over a fused one over a rejected torque candidate over a candidate (the enum's
+// order: the larger value wins).
 enum class ContactStatus { kNone, kCandidate, kRejected, kKinematic, kTorque, kGated };
 const char* ContactStatusName(ContactStatus status);  // "none", "candidate", ...
 struct LinkContact {
