@@ -229,11 +229,30 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   cues.T_PC = outside.T_PC;
   cues.K = outside.K;
   cues.gaps = Gaps(st);
+  // Of the contacts, the inspector's selection alone (its markers, ringed): the rest would hide
+  // the gaps.
+  if (selection.link >= 0 && selection.set >= 0 &&
+      static_cast<std::size_t>(selection.set) < st.sets.size()) {
+    const std::size_t i = static_cast<std::size_t>(selection.set);
+    OverlayEstimate chosen =
+        OverlayOf(p_.sets()[i].name, p_.sets()[i].colour, st.sets[i], selection.link, -1);
+    chosen.contacts.erase(std::remove_if(chosen.contacts.begin(), chosen.contacts.end(),
+                                         [](const OverlayContact& c) { return !c.selected; }),
+                          chosen.contacts.end());
+    chosen.features.clear();
+    cues.estimates.push_back(std::move(chosen));
+  }
   OverlayLayers only_gaps;
-  only_gaps.silhouette = only_gaps.outline = only_gaps.contacts = only_gaps.forces = false;
+  only_gaps.silhouette = only_gaps.outline = only_gaps.forces = false;
   only_gaps.cones = only_gaps.features = only_gaps.axes = only_gaps.uncertainty = false;
   only_gaps.hud = false;
   Image8 external = painter_->Paint(cues, only_gaps);
+  // SideBySide scales every panel to the camera's height.
+  const double to_height = static_cast<double>(annotated.height);
+  external_view_ = {
+      true, outside.T_PC, outside.K,
+      annotated.width + static_cast<int>(std::lround(middle->width * to_height / middle->height)),
+      to_height / external.height};
   AddSideView(st, external);
   const bool truth = s.has_groundtruth();
   return SideBySide(
@@ -248,6 +267,7 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
 Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height,
                                       const OverlayLayers& layers) {
   const Scene scene = ExternalScene(st, IntrinsicsFromFov(width, height, 40.0), orbit);
+  external_view_ = {true, scene.T_PC, scene.K, 0, 1.0};
   RenderOutput out;
   renderer_.Render(scene, out, false);
   OverlayFrame of;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdlib>
+#include <cstring>
 #include <deque>
 #include <exception>
 #include <filesystem>
@@ -245,6 +246,10 @@ class Runner {
     state_.compare_version = -1;
   }
   SessionOverview* compare() { return compare_.get(); }
+  // Where the last picture drew its 3-D view (FrameComposer::last_external_view).
+  const FrameComposer::ExternalView& external_view() const {
+    return composer_->last_external_view();
+  }
   Image8 Picture() {
     composer_->orbit = state_.orbit;
     composer_->selection = {
@@ -1621,12 +1626,25 @@ bool CameraPixel(Runner& runner, const Vec3& X_P, Vec2& pixel) {
   return true;
 }
 
+// Where the picture draws a point of the palm frame, in the picture's pixels: in the camera panel
+// (panel 0: drawn 1:1 from the left) or in the external 3-D view (panel 1).
+bool PicturePixel(Runner& runner, int panel, const Vec3& X_P, Vec2& pixel) {
+  if (panel == 0) return CameraPixel(runner, X_P, pixel);
+  const FrameComposer::ExternalView& v = runner.external_view();
+  if (!v.valid) return false;
+  const Vec3 X_C = v.T_PC.inverse() * X_P;
+  if (X_C.z() <= 1e-6) return false;
+  pixel = Vec2(v.x0, 0.0) + v.scale * v.K.Project(X_C);
+  return true;
+}
+
 // The selection in words, "SET/LINK" or "SET/visual:ID" ("nothing"), and where the camera panel
-// draws it (a link: its nearest contact's point on the object; NaN when not drawn).
-std::string DescribeSelection(Runner& runner, const GuiState& state, Vec2& pixel) {
+// (`pixel`) and the 3-D view (`pixel_3d`) draw it, in the picture's pixels (a link: its nearest
+// contact's point on the object; NaN when not drawn).
+std::string DescribeSelection(Runner& runner, const GuiState& state, Vec2& pixel, Vec2& pixel_3d) {
   const SessionPlayer& p = runner.player();
   const std::size_t set = InspectedSet(runner, state);
-  pixel = Vec2::Constant(NAN);
+  pixel = pixel_3d = Vec2::Constant(NAN);
   const std::string prefix = p.sets()[set].name + "/";
   if (state.inspect_visual >= 0) {
     for (const FilterTrace::Visual& v : runner.visual(set))
@@ -1636,24 +1654,23 @@ std::string DescribeSelection(Runner& runner, const GuiState& state, Vec2& pixel
   const auto& links = p.models().hand.links;
   if (state.inspect_link < 0 || static_cast<std::size_t>(state.inspect_link) >= links.size())
     return "nothing";
-  double nearest = INFINITY;
-  for (const FilterTrace::Contact& c : p.tracker(set).filter().trace().contacts) {
-    Vec2 q;
-    if (c.link == state.inspect_link && c.distance < nearest && CameraPixel(runner, c.c_o_P, q))
-      nearest = c.distance, pixel = q;
+  for (int panel = 0; panel < 2; ++panel) {
+    double nearest = INFINITY;
+    for (const FilterTrace::Contact& c : p.tracker(set).filter().trace().contacts) {
+      Vec2 q;
+      if (c.link == state.inspect_link && c.distance < nearest &&
+          PicturePixel(runner, panel, c.c_o_P, q))
+        nearest = c.distance, (panel == 0 ? pixel : pixel_3d) = q;
+    }
   }
   return prefix + links[static_cast<std::size_t>(state.inspect_link)].name;
 }
 
-// A click on the camera panel of the picture (its pixel `at`, the panel drawn 1:1 from the left)
-// selects the contact or visual measurement drawn nearest to it within 12 px: the inspected set's,
-// else any set's. The Inspector tab comes to the front.
-void SelectInCamera(Runner& runner, GuiState& state, const Vec2& at) {
-  const Session& s = runner.session();
+// A click on the picture (its pixel `at`) selects the contact or visual measurement drawn nearest
+// to it within 12 px, in the camera panel or the 3-D view: the inspected set's, else any set's.
+// The Inspector tab comes to the front.
+void SelectInPicture(Runner& runner, GuiState& state, const Vec2& at) {
   const SessionPlayer& p = runner.player();
-  if (!s.info().camera || runner.frame() < 0) return;
-  const Intrinsics& K = *s.info().camera;
-  if (at.x() < 0 || at.y() < 0 || at.x() >= K.width || at.y() >= K.height) return;
   double best = 12.0;
   int set = -1, link = -1, visual = -1;
   // The inspected set's first: the sets' markers of one contact lie within a pixel or two.
@@ -1661,13 +1678,15 @@ void SelectInCamera(Runner& runner, GuiState& state, const Vec2& at) {
   for (std::size_t n = 0; n <= p.sets().size() && set < 0; ++n) {
     const std::size_t i = n == 0 ? inspected : n - 1;
     if (state.Hidden(i) || (n > 0 && i == inspected)) continue;
-    for (const FilterTrace::Contact& c : p.tracker(i).filter().trace().contacts) {
-      Vec2 q;
-      if (!CameraPixel(runner, c.c_o_P, q)) continue;
-      const double d = (q - at).norm();
-      if (d < best) best = d, set = static_cast<int>(i), link = c.link, visual = -1;
-    }
+    for (const FilterTrace::Contact& c : p.tracker(i).filter().trace().contacts)
+      for (int panel = 0; panel < 2; ++panel) {
+        Vec2 q;
+        if (!PicturePixel(runner, panel, c.c_o_P, q)) continue;
+        const double d = (q - at).norm();
+        if (d < best) best = d, set = static_cast<int>(i), link = c.link, visual = -1;
+      }
     for (const FilterTrace::Visual& v : runner.visual(i)) {
+      if (!runner.session().info().camera) break;
       const double d = (v.measured - at).norm();
       if (d < best) best = d, set = static_cast<int>(i), link = -1, visual = v.id;
     }
@@ -1693,6 +1712,15 @@ void SelectInCamera(Runner& runner, GuiState& state, const Vec2& at) {
 //   expect time T TOL           the current time is T within TOL [s]
 //   expect events KIND MIN      at least MIN events of KIND (`any`: of every kind), all sets
 //   expect window A B TOL       the timeline and plots show [A, B] s within TOL
+//   click-picture U V           click the composed picture's pixel (U, V) (click-camera: the
+//                               same; the camera panel is drawn 1:1 from the picture's left)
+//   select SET LINK             the inspector inspects SET and selects LINK
+//   expect selected WHAT        SET/LINK, SET/visual:ID or nothing; says where it is drawn
+//   expect contact STATUS       the selected link's status now, in the table and the history
+//   param NAME VALUE            a parameter of the panel (params.json's name, a.b when nested)
+//   compare [FILE]              A/B with the panel's parameters, or FILE's
+//   wait-compare                until B is replayed
+//   expect difference SET QUANTITY MIN MAX   the largest |B - A| of a series lies in [MIN, MAX]
 class GuiScript {
  public:
   static GuiScript Load(const std::string& path) {
@@ -1731,8 +1759,8 @@ class GuiScript {
           fail("press left, right, shift+left or shift+right");
       } else if (c.verb == "screenshot") {
         if (!(words >> c.text)) fail("screenshot FILE");
-      } else if (c.verb == "click-camera") {
-        if (!(words >> c.a >> c.b)) fail("click-camera U V (the camera image's pixels)");
+      } else if (c.verb == "click-camera" || c.verb == "click-picture") {
+        if (!(words >> c.a >> c.b)) fail((c.verb + " U V (the picture's pixels)").c_str());
       } else if (c.verb == "select") {
         if (!(words >> c.text >> c.text2)) fail("select SET LINK (names)");
       } else if (c.verb == "param") {
@@ -1791,7 +1819,9 @@ class GuiScript {
         }
       } else {
         fail(
-            "wait, wait-events, seek, key, press, click, click-camera, scroll, drag, select, "
+            "wait, wait-events, seek, key, press, click, click-camera, click-picture, scroll, "
+            "drag, "
+            "select, "
             "param, compare, wait-compare, screenshot or expect");
       }
       script.commands_.push_back(c);
@@ -1922,11 +1952,14 @@ class GuiScript {
         continue;
       }
       if (c.verb == "expect-selected") {
-        Vec2 pixel;
-        const std::string selected = DescribeSelection(runner, state, pixel);
-        char drawn[96] = "";
+        Vec2 pixel, pixel_3d;
+        const std::string selected = DescribeSelection(runner, state, pixel, pixel_3d);
+        char drawn[160] = "";
         if (std::isfinite(pixel.x()))
           std::snprintf(drawn, sizeof drawn, " (drawn at %.2f %.2f px)", pixel.x(), pixel.y());
+        if (std::isfinite(pixel_3d.x()))
+          std::snprintf(drawn + std::strlen(drawn), sizeof drawn - std::strlen(drawn),
+                        " (3-D view at %.2f %.2f px)", pixel_3d.x(), pixel_3d.y());
         Report(where, selected == c.text, "selected " + selected + drawn + ", expected " + c.text);
         continue;
       }
@@ -2006,7 +2039,7 @@ class GuiScript {
         mouse_ = ImVec2(static_cast<float>(c.a), static_cast<float>(c.b));
         io.MousePos = mouse_;
         pressing_ = true;
-      } else if (c.verb == "click-camera") {  // the camera panel is drawn 1:1 from the left
+      } else if (c.verb == "click-camera" || c.verb == "click-picture") {
         const float scale = state.picture_max.x > state.picture_min.x && state.picture_width > 0
                                 ? (state.picture_max.x - state.picture_min.x) / state.picture_width
                                 : 0.0f;
@@ -2103,7 +2136,7 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
       tex.picture.width > 0) {
     const ImGuiIO& io = mouse;
     const double scale = tex.picture.width / static_cast<double>(picture_max.x - picture_min.x);
-    SelectInCamera(
+    SelectInPicture(
         runner, state,
         Vec2((io.MousePos.x - picture_min.x) * scale, (io.MousePos.y - picture_min.y) * scale));
   }

@@ -87,6 +87,17 @@ class FrameComposer {
     int link = -1;
     int visual = -1;
   } selection;
+  // Where the last picture drew its external 3-D view: the view's camera (palm frame), its
+  // intrinsics, its left edge in the picture [px] and the scale it was drawn at (valid: a picture
+  // has been composed). The GUI maps a click on it back to the contact drawn there.
+  struct ExternalView {
+    bool valid = false;
+    Transform T_PC = Transform::Identity();
+    Intrinsics K;
+    int x0 = 0;
+    double scale = 1.0;
+  };
+  const ExternalView& last_external_view() const { return external_view_; }
 
  private:
   // Every set's estimate with its contacts, and the HUD lines, as the overlays take them.
@@ -104,6 +115,7 @@ class FrameComposer {
   std::unique_ptr<OverlayPainter> painter_;
   BulletContactQuery query_;
   std::vector<ContactPair> pairs_;
+  ExternalView external_view_;
 };
 
 }  // namespace inhand::app
