@@ -333,8 +333,8 @@ struct Textures {
   bool has_patch_camera = false, has_patch_virtual = false;  // for the selection shown now
 };
 
-// The (2 half + 1)² pixels of an RGB image around `centre`, each drawn zoom × zoom, grey outside
-// the image, with a yellow cross hair on the centre pixel.
+// The (2 half + 1)² pixels of an image (RGB, RGBA or grey) around `centre`, each drawn zoom × zoom,
+// grey outside the image, with a yellow cross hair on the centre pixel; RGB.
 Image8 ZoomedPatch(const Image8& image, const Vec2& centre, int half, int zoom) {
   const int side = (2 * half + 1) * zoom;
   Image8 out(side, side, 3);
@@ -344,9 +344,9 @@ Image8 ZoomedPatch(const Image8& image, const Vec2& centre, int half, int zoom) 
     for (int x = 0; x < side; ++x) {
       const int sx = cx - half + x / zoom, sy = cy - half + y / zoom;
       std::uint8_t* o = out.pixel(x, y);
-      const bool inside =
-          image.channels >= 3 && sx >= 0 && sy >= 0 && sx < image.width && sy < image.height;
-      for (int c = 0; c < 3; ++c) o[c] = inside ? image.pixel(sx, sy)[c] : 90;
+      const bool inside = sx >= 0 && sy >= 0 && sx < image.width && sy < image.height;
+      for (int c = 0; c < 3; ++c)  // a grey image's one channel in all three
+        o[c] = inside ? image.pixel(sx, sy)[image.channels >= 3 ? c : 0] : 90;
       const int dx = x - half * zoom - zoom / 2, dy = y - half * zoom - zoom / 2;
       if ((dx == 0 || dy == 0) && std::abs(dx) + std::abs(dy) >= zoom &&
           std::abs(dx) + std::abs(dy) <= 3 * zoom)
