@@ -804,6 +804,13 @@ Series Axis(std::array<std::vector<float>, 3> SessionOverview::Set::*m, int axis
     return (s.*m)[static_cast<std::size_t>(axis)];
   };
 }
+// One of a per-joint or per-link list of series (empty where the set has no such entry).
+Series Element(std::vector<std::vector<float>> SessionOverview::Set::*m, std::size_t index) {
+  return [m, index](const SessionOverview::Set& s) -> const std::vector<float>& {
+    static const std::vector<float> kNone;
+    return index < (s.*m).size() ? (s.*m)[index] : kNone;
+  };
+}
 
 struct PlotSpec {
   const char* id;
@@ -825,6 +832,18 @@ void DrawPlot(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size
                     ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse);
   DrawPlotInside(runner, state, spec, size);
   ImGui::EndChild();
+}
+
+// Plots side by side, `per_row` to a row across `avail` pixels, each `height` tall.
+void DrawPlots(Runner& runner, GuiState& state, const std::vector<PlotSpec>& plots, int per_row,
+               float avail, float height) {
+  const float spacing = ImGui::GetStyle().ItemSpacing.x;
+  const ImVec2 size(
+      (avail - static_cast<float>(per_row - 1) * spacing) / static_cast<float>(per_row), height);
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    if (i % static_cast<std::size_t>(per_row)) ImGui::SameLine();
+    DrawPlot(runner, state, plots[i], size);
+  }
 }
 
 void DrawPlotInside(Runner& runner, GuiState& state, const PlotSpec& spec, ImVec2 size) {
@@ -1054,12 +1073,7 @@ void DrawErrorPlots(Runner& runner, GuiState& state, float avail) {
                      14.449, 16.812, 60.0});
   plots.push_back({"##pen", "deepest link inside the estimate (5 mm: inconsistent)", "mm",
                    Member(&Set::penetration), NAN, NAN, state.params.health.penetration * 1000});
-  const float spacing = ImGui::GetStyle().ItemSpacing.x;
-  const ImVec2 size((avail - spacing) / 2, 104);
-  for (std::size_t i = 0; i < plots.size(); ++i) {
-    if (i % 2) ImGui::SameLine();
-    DrawPlot(runner, state, plots[i], size);
-  }
+  DrawPlots(runner, state, plots, 2, avail, 104);
   if (!truth) ImGui::TextUnformatted("no ground truth: errors and NEES are not known");
 }
 
@@ -1078,15 +1092,9 @@ void DrawCountPlots(Runner& runner, GuiState& state, float avail) {
     ImGui::EndCombo();
   }
   const std::size_t j = static_cast<std::size_t>(state.bias_joint);
-  static const std::vector<float> kNone;
-  const auto per_joint = [j](std::vector<std::vector<float>> Set::*m) -> Series {
-    return [m, j](const Set& s) -> const std::vector<float>& {
-      return j < (s.*m).size() ? (s.*m)[j] : kNone;
-    };
-  };
   std::vector<PlotSpec> plots = {
       {"##bias", "bias of " + (joints.empty() ? std::string() : joints[j]) + " (faint: +-sigma)",
-       "deg", per_joint(&Set::bias)},
+       "deg", Element(&Set::bias, j)},
       {"##force", "contact forces from the torques, summed", "N", Member(&Set::contact_force)},
       {"##constraints", "contact constraints applied", "", Member(&Set::constraints)},
       {"##gated", "measurements gated (contacts, vision)", "", Member(&Set::gated)},
@@ -1096,13 +1104,8 @@ void DrawCountPlots(Runner& runner, GuiState& state, float avail) {
        Member(&Set::visual_mahalanobis)},
       {"##unexplained", "joint torque the contacts leave unexplained", "N m",
        Member(&Set::unexplained_torque)}};
-  plots.front().envelope = per_joint(&Set::sigma_bias);
-  const float spacing = ImGui::GetStyle().ItemSpacing.x;
-  const ImVec2 size((avail - spacing) / 2, 104);
-  for (std::size_t i = 0; i < plots.size(); ++i) {
-    if (i % 2) ImGui::SameLine();
-    DrawPlot(runner, state, plots[i], size);
-  }
+  plots.front().envelope = Element(&Set::sigma_bias, j);
+  DrawPlots(runner, state, plots, 2, avail, 104);
 }
 
 // The inspector's colours of a link's contact status (ContactStatus): nothing, a candidate, a
@@ -1345,23 +1348,13 @@ void DrawInspector(Runner& runner, GuiState& state, const Textures& tex, float a
   ImGui::Text("%s in every set (the lanes and plots share the timeline's window; click to seek)",
               name.c_str());
   DrawStatusLanes(runner, state, l, avail);
-  static const std::vector<float> kNone;
-  const auto of_link = [l](std::vector<std::vector<float>> Set::*m) -> Series {
-    return [m, l](const Set& s) -> const std::vector<float>& {
-      return l < (s.*m).size() ? (s.*m)[l] : kNone;
-    };
-  };
   std::vector<PlotSpec> plots = {
-      {"##ldistance", "signed distance", "mm", of_link(&Set::link_distance)},
-      {"##lforce", "force from torques", "N", of_link(&Set::link_force)},
-      {"##lmahalanobis", "Mahalanobis", "", of_link(&Set::link_mahalanobis)}};
+      {"##ldistance", "signed distance", "mm", Element(&Set::link_distance, l)},
+      {"##lforce", "force from torques", "N", Element(&Set::link_force, l)},
+      {"##lmahalanobis", "Mahalanobis", "", Element(&Set::link_mahalanobis, l)}};
   plots[0].line = 0.0;
   if (gate > 0) plots[2].line = gate;
-  const ImVec2 size((avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3, 104);
-  for (std::size_t i = 0; i < plots.size(); ++i) {
-    if (i > 0) ImGui::SameLine();
-    DrawPlot(runner, state, plots[i], size);
-  }
+  DrawPlots(runner, state, plots, 3, avail, 104);
 }
 
 // What the Compare tab can set side by side: one per-sample series of each set.
@@ -1495,20 +1488,14 @@ void DrawCompare(Runner& runner, GuiState& state, float avail) {
     }
     ImGui::EndTable();
   }
-  const auto series = [m = q.series](const SessionOverview::Set& s) -> const std::vector<float>& {
-    return s.*m;
-  };
+  const Series series = Member(q.series);
   std::vector<PlotSpec> plots = {{"##ca", std::string("A: ") + q.title, q.unit, series},
                                  {"##cb", std::string("B: ") + q.title, q.unit, series},
                                  {"##cd", std::string("B - A: ") + q.title, q.unit, series}};
   plots[1].data = &b;
   plots[2].data = &diff;
   plots[2].line = 0.0;
-  const ImVec2 size((avail - 2 * ImGui::GetStyle().ItemSpacing.x) / 3, 150);
-  for (std::size_t i = 0; i < plots.size(); ++i) {
-    if (i > 0) ImGui::SameLine();
-    DrawPlot(runner, state, plots[i], size);
-  }
+  DrawPlots(runner, state, plots, 3, avail, 150);
 }
 
 // Every event of every set in time order, filtered by text; a click seeks to it.
