@@ -42,7 +42,7 @@ if [ $ALL -eq 1 ]; then
 else
   GUI=OFF  # no GUI test runs in the split: ImGui need not be built
   TARGETS=(inhand core_tests kinematics_tests io_tests sessions_tests contacts_tests filter_tests features_tests
-           renderer_tests simulator_tests fuzz_tests tracker_tests ros_tests app_tests)
+           renderer_tests renderer_loading_tests simulator_tests fuzz_tests tracker_tests ros_tests app_tests)
   EXCLUDE=$END_TO_END
 fi
 # -O1 with line tables: half the compile time of -O2 -g (filter.cpp 103 -> 52 s), stack traces

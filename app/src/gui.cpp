@@ -6,7 +6,6 @@
 #include <GLFW/glfw3.h>
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
-#include <imgui_impl_opengl2.h>
 #include <imgui_impl_opengl3.h>
 
 #include <algorithm>
@@ -40,6 +39,7 @@
 #include "inhand/app/session_overview.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/core/time.hpp"
+#include "inhand/renderer/osmesa.hpp"
 #include "inhand/renderer/timeline_strip.hpp"
 #include "inhand/sessions/image_io.hpp"
 
@@ -2235,17 +2235,24 @@ class Timings {
 
 int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, GuiState& state,
                 GuiScript* script) {
-  OSMesaContext ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
+  // OSMesa through the renderer's loader (osmesa.hpp): the process loads it only here.
+  const auto create_context = reinterpret_cast<decltype(&::OSMesaCreateContextExt)>(
+      OsMesaFunction("OSMesaCreateContextExt"));
+  const auto make_current =
+      reinterpret_cast<decltype(&::OSMesaMakeCurrent)>(OsMesaFunction("OSMesaMakeCurrent"));
+  const auto destroy_context =
+      reinterpret_cast<decltype(&::OSMesaDestroyContext)>(OsMesaFunction("OSMesaDestroyContext"));
+  OSMesaContext ctx = create_context(OSMESA_RGBA, 24, 0, 0, nullptr);
   if (!ctx) throw std::runtime_error("gui: cannot create an offscreen OpenGL context");
   std::vector<std::uint8_t> buffer(static_cast<std::size_t>(cmd.width) * cmd.height * 4);
-  OSMesaMakeCurrent(ctx, buffer.data(), GL_UNSIGNED_BYTE, cmd.width, cmd.height);
+  make_current(ctx, buffer.data(), GL_UNSIGNED_BYTE, cmd.width, cmd.height);
   GuiGl gl;
-  gl.Load([](const char* name) { return reinterpret_cast<void*>(OSMesaGetProcAddress(name)); });
+  gl.Load(OsMesaFunction);
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;
   ImGui::StyleColorsDark();
-  ImGui_ImplOpenGL2_Init();
+  const OffscreenImGuiRenderer imgui_gl(OsMesaFunction);
   // The arrows at GLFW's key codes, as the window's backend maps them (gui --script presses them).
   ImGui::GetIO().KeyMap[ImGuiKey_LeftArrow] = GLFW_KEY_LEFT;
   ImGui::GetIO().KeyMap[ImGuiKey_RightArrow] = GLFW_KEY_RIGHT;
@@ -2274,7 +2281,6 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
     ImGuiIO& io = ImGui::GetIO();
     io.DisplaySize = ImVec2(static_cast<float>(cmd.width), static_cast<float>(cmd.height));
     io.DeltaTime = 1.0f / 30.0f;
-    ImGui_ImplOpenGL2_NewFrame();
     if (script) script->BeforeFrame(runner, state, io);
     ImGui::NewFrame();
     DrawUi(runner, state, tex, cmd.width, cmd.height);
@@ -2282,16 +2288,15 @@ int RunHeadless(const GuiCommand& cmd, RenderThread& render, Runner& runner, Gui
     gl.Viewport(0, 0, cmd.width, cmd.height);
     gl.ClearColor(0.1f, 0.1f, 0.12f, 1.0f);
     gl.Clear(GL_COLOR_BUFFER_BIT);
-    ImGui_ImplOpenGL2_RenderDrawData(ImGui::GetDrawData());
+    imgui_gl.Render(ImGui::GetDrawData());
     gl.Finish();
     if (script)
       if (const std::string file = script->TakeScreenshot(); !file.empty())
         WriteImage(file, picture());
   }
   if (!cmd.screenshot.empty()) WriteImage(cmd.screenshot, picture());
-  ImGui_ImplOpenGL2_Shutdown();
   ImGui::DestroyContext();
-  OSMesaDestroyContext(ctx);
+  destroy_context(ctx);
   std::cout << "offscreen interface (no display): " << f << " frames, t "
             << runner.session().t(std::max(0, runner.sample())) << " s" << timings.Report();
   if (!cmd.screenshot.empty()) std::cout << ", screenshot " << cmd.screenshot;

@@ -17,7 +17,7 @@
 namespace inhand::app {
 
 // GL entry points of the context that draws the interface: the window's (libGL, through GLFW)
-// or the offscreen one (OSMesa). Never the renderer's direct calls: those belong to OSMesa.
+// or the offscreen one (OSMesa, through the renderer's loader).
 struct GuiGl {
   void (*GenTextures)(GLsizei, GLuint*) = nullptr;
   void (*BindTexture)(GLenum, GLuint) = nullptr;
@@ -113,5 +113,72 @@ class RenderThread {
 
 // The interface's framebuffer (width x height, bottom row first in GL) as a PNG at `path`.
 void SaveScreenshot(const GuiGl& gl, int width, int height, const std::string& path);
+
+// Draws ImGui's draw lists in the offscreen interface's context (OSMesa, compatibility profile)
+// with OpenGL 1.1 vertex arrays, the way ImGui's OpenGL2 backend does, but through functions
+// looked up at run time: ImGui's backend calls GL directly, which would make every process load
+// OSMesa at start.
+class OffscreenImGuiRenderer {
+ public:
+  // `load` returns the address of a GL function by name. Builds ImGui's font atlas and uploads it.
+  template <typename Loader>
+  explicit OffscreenImGuiRenderer(Loader load) {
+    const auto get = [&](auto& fn, const char* name) {
+      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(load(name));
+    };
+    get(Enable, "glEnable");
+    get(Disable, "glDisable");
+    get(BlendFunc, "glBlendFunc");
+    get(EnableClientState, "glEnableClientState");
+    get(DisableClientState, "glDisableClientState");
+    get(PolygonMode, "glPolygonMode");
+    get(ShadeModel, "glShadeModel");
+    get(TexEnvi, "glTexEnvi");
+    get(Viewport, "glViewport");
+    get(MatrixMode, "glMatrixMode");
+    get(LoadIdentity, "glLoadIdentity");
+    get(Ortho, "glOrtho");
+    get(VertexPointer, "glVertexPointer");
+    get(TexCoordPointer, "glTexCoordPointer");
+    get(ColorPointer, "glColorPointer");
+    get(Scissor, "glScissor");
+    get(BindTexture, "glBindTexture");
+    get(DrawElements, "glDrawElements");
+    get(GenTextures, "glGenTextures");
+    get(TexParameteri, "glTexParameteri");
+    get(PixelStorei, "glPixelStorei");
+    get(TexImage2D, "glTexImage2D");
+    UploadFonts();
+  }
+  // Draws one frame's lists into the current framebuffer (fb_width x fb_height pixels).
+  void Render(const struct ImDrawData* data) const;
+
+ private:
+  void UploadFonts();
+  void (*Enable)(GLenum) = nullptr;
+  void (*Disable)(GLenum) = nullptr;
+  void (*BlendFunc)(GLenum, GLenum) = nullptr;
+  void (*EnableClientState)(GLenum) = nullptr;
+  void (*DisableClientState)(GLenum) = nullptr;
+  void (*PolygonMode)(GLenum, GLenum) = nullptr;
+  void (*ShadeModel)(GLenum) = nullptr;
+  void (*TexEnvi)(GLenum, GLenum, GLint) = nullptr;
+  void (*Viewport)(GLint, GLint, GLsizei, GLsizei) = nullptr;
+  void (*MatrixMode)(GLenum) = nullptr;
+  void (*LoadIdentity)() = nullptr;
+  void (*Ortho)(GLdouble, GLdouble, GLdouble, GLdouble, GLdouble, GLdouble) = nullptr;
+  void (*VertexPointer)(GLint, GLenum, GLsizei, const void*) = nullptr;
+  void (*TexCoordPointer)(GLint, GLenum, GLsizei, const void*) = nullptr;
+  void (*ColorPointer)(GLint, GLenum, GLsizei, const void*) = nullptr;
+  void (*Scissor)(GLint, GLint, GLsizei, GLsizei) = nullptr;
+  void (*BindTexture)(GLenum, GLuint) = nullptr;
+  void (*DrawElements)(GLenum, GLsizei, GLenum, const void*) = nullptr;
+  void (*GenTextures)(GLsizei, GLuint*) = nullptr;
+  void (*TexParameteri)(GLenum, GLenum, GLint) = nullptr;
+  void (*PixelStorei)(GLenum, GLint) = nullptr;
+  void (*TexImage2D)(GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum,
+                     const void*) = nullptr;
+  GLuint font_texture_ = 0;
+};
 
 }  // namespace inhand::app

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "inhand/core/error.hpp"
+#include "inhand/renderer/osmesa.hpp"
 #include "inhand/sessions/image_io.hpp"
 
 namespace inhand {
@@ -85,15 +86,107 @@ void main() {
 }
 )";
 
-GLuint Compile(GLenum type, const char* source) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
+// The GL functions the renderer calls, from OSMesa's contexts (osmesa.hpp), with the headers'
+// own types.
+#define INHAND_RENDERER_GL_FUNCTIONS(X) \
+  X(ActiveTexture)                      \
+  X(AttachShader)                       \
+  X(BindBuffer)                         \
+  X(BindFramebuffer)                    \
+  X(BindRenderbuffer)                   \
+  X(BindTexture)                        \
+  X(BindVertexArray)                    \
+  X(BlendFunci)                         \
+  X(BufferData)                         \
+  X(CheckFramebufferStatus)             \
+  X(Clear)                              \
+  X(ClearBufferfv)                      \
+  X(ClearBufferuiv)                     \
+  X(ColorMaski)                         \
+  X(CompileShader)                      \
+  X(CreateProgram)                      \
+  X(CreateShader)                       \
+  X(DeleteFramebuffers)                 \
+  X(DeleteRenderbuffers)                \
+  X(DeleteShader)                       \
+  X(DepthFunc)                          \
+  X(DepthMask)                          \
+  X(Disable)                            \
+  X(Disablei)                           \
+  X(DrawBuffers)                        \
+  X(DrawElements)                       \
+  X(Enable)                             \
+  X(EnableVertexAttribArray)            \
+  X(Enablei)                            \
+  X(FramebufferRenderbuffer)            \
+  X(GenBuffers)                         \
+  X(GenFramebuffers)                    \
+  X(GenRenderbuffers)                   \
+  X(GenTextures)                        \
+  X(GenVertexArrays)                    \
+  X(GenerateMipmap)                     \
+  X(GetProgramiv)                       \
+  X(GetShaderInfoLog)                   \
+  X(GetShaderiv)                        \
+  X(GetString)                          \
+  X(GetUniformLocation)                 \
+  X(LinkProgram)                        \
+  X(LogicOp)                            \
+  X(PixelStorei)                        \
+  X(ReadBuffer)                         \
+  X(ReadPixels)                         \
+  X(RenderbufferStorage)                \
+  X(ShaderSource)                       \
+  X(TexImage2D)                         \
+  X(TexParameteri)                      \
+  X(Uniform1i)                          \
+  X(Uniform1ui)                         \
+  X(Uniform3f)                          \
+  X(Uniform4f)                          \
+  X(UniformMatrix4fv)                   \
+  X(UseProgram)                         \
+  X(VertexAttribPointer)                \
+  X(Viewport)
+
+struct GlApi {
+#define INHAND_GL_MEMBER(name) decltype(&::gl##name) name = nullptr;
+  INHAND_RENDERER_GL_FUNCTIONS(INHAND_GL_MEMBER)
+#undef INHAND_GL_MEMBER
+  decltype(&::OSMesaCreateContextAttribs) CreateContextAttribs = nullptr;
+  decltype(&::OSMesaMakeCurrent) MakeCurrent = nullptr;
+  decltype(&::OSMesaDestroyContext) DestroyContext = nullptr;
+};
+
+GlApi LoadGl() {
+  GlApi api;
+#define INHAND_GL_LOAD(name) \
+  api.name = reinterpret_cast<decltype(api.name)>(OsMesaFunction("gl" #name));
+  INHAND_RENDERER_GL_FUNCTIONS(INHAND_GL_LOAD)
+#undef INHAND_GL_LOAD
+  api.CreateContextAttribs = reinterpret_cast<decltype(api.CreateContextAttribs)>(
+      OsMesaFunction("OSMesaCreateContextAttribs"));
+  api.MakeCurrent =
+      reinterpret_cast<decltype(api.MakeCurrent)>(OsMesaFunction("OSMesaMakeCurrent"));
+  api.DestroyContext =
+      reinterpret_cast<decltype(api.DestroyContext)>(OsMesaFunction("OSMesaDestroyContext"));
+  return api;
+}
+
+// Loaded once per process, on the first renderer.
+const GlApi& Gl() {
+  static const GlApi api = LoadGl();
+  return api;
+}
+
+GLuint Compile(const GlApi& gl, GLenum type, const char* source) {
+  const GLuint s = gl.CreateShader(type);
+  gl.ShaderSource(s, 1, &source, nullptr);
+  gl.CompileShader(s);
   GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
   if (!ok) {
     char log[2048];
-    glGetShaderInfoLog(s, sizeof(log), nullptr, log);
+    gl.GetShaderInfoLog(s, sizeof(log), nullptr, log);
     throw std::runtime_error(std::string("renderer: shader compilation failed: ") + log);
   }
   return s;
@@ -110,6 +203,7 @@ struct GpuMesh {
 }  // namespace
 
 struct Renderer::Impl {
+  const GlApi& gl = Gl();
   OSMesaContext ctx = nullptr;
   std::vector<std::uint8_t> default_buffer = std::vector<std::uint8_t>(16 * 16 * 4);
   GLuint program = 0;
@@ -121,32 +215,32 @@ struct Renderer::Impl {
   int fb_w = 0, fb_h = 0;
 
   void MakeCurrent() {
-    if (!OSMesaMakeCurrent(ctx, default_buffer.data(), GL_UNSIGNED_BYTE, 16, 16))
+    if (!gl.MakeCurrent(ctx, default_buffer.data(), GL_UNSIGNED_BYTE, 16, 16))
       throw std::runtime_error("renderer: OSMesaMakeCurrent failed");
   }
 
   void EnsureFramebuffer(int w, int h) {
     if (fbo && w == fb_w && h == fb_h) return;
     if (fbo) {
-      glDeleteFramebuffers(1, &fbo);
+      gl.DeleteFramebuffers(1, &fbo);
       const GLuint rbs[4] = {rb_color, rb_label, rb_depthf, rb_zbuffer};
-      glDeleteRenderbuffers(4, rbs);
+      gl.DeleteRenderbuffers(4, rbs);
     }
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    gl.GenFramebuffers(1, &fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
     const auto make_rb = [&](GLenum format, GLenum attachment) {
       GLuint rb;
-      glGenRenderbuffers(1, &rb);
-      glBindRenderbuffer(GL_RENDERBUFFER, rb);
-      glRenderbufferStorage(GL_RENDERBUFFER, format, w, h);
-      glFramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, rb);
+      gl.GenRenderbuffers(1, &rb);
+      gl.BindRenderbuffer(GL_RENDERBUFFER, rb);
+      gl.RenderbufferStorage(GL_RENDERBUFFER, format, w, h);
+      gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, rb);
       return rb;
     };
     rb_color = make_rb(GL_RGBA8, GL_COLOR_ATTACHMENT0);
     rb_label = make_rb(GL_R16UI, GL_COLOR_ATTACHMENT1);
     rb_depthf = make_rb(GL_R32F, GL_COLOR_ATTACHMENT2);
     rb_zbuffer = make_rb(GL_DEPTH_COMPONENT24, GL_DEPTH_ATTACHMENT);
-    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw std::runtime_error("renderer: framebuffer incomplete");
     fb_w = w;
     fb_h = h;
@@ -165,16 +259,16 @@ struct Renderer::Impl {
                            : DecodeImage(m.texture_blob.data(), m.texture_blob.size(),
                                          "embedded texture of material '" + m.name + "'");
     GLuint tex;
-    glGenTextures(1, &tex);
-    glBindTexture(GL_TEXTURE_2D, tex);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.width, rgb.height, 0, GL_RGB, GL_UNSIGNED_BYTE,
-                 rgb.data.data());
-    glGenerateMipmap(GL_TEXTURE_2D);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    gl.GenTextures(1, &tex);
+    gl.BindTexture(GL_TEXTURE_2D, tex);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.width, rgb.height, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                  rgb.data.data());
+    gl.GenerateMipmap(GL_TEXTURE_2D);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     textures.emplace(key, tex);
     return tex;
   }
@@ -192,40 +286,42 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
                          OSMESA_CONTEXT_MINOR_VERSION,
                          3,
                          0};
-  impl_->ctx = OSMesaCreateContextAttribs(attribs, nullptr);
+  impl_->ctx = impl_->gl.CreateContextAttribs(attribs, nullptr);
   if (impl_->ctx == nullptr)
     throw std::runtime_error("renderer: cannot create an OSMesa OpenGL 3.3 core context");
   impl_->MakeCurrent();
-  const GLuint vs = Compile(GL_VERTEX_SHADER, kVertexShader);
-  const GLuint fs = Compile(GL_FRAGMENT_SHADER, kFragmentShader);
   Impl& r = *impl_;
-  r.program = glCreateProgram();
-  glAttachShader(r.program, vs);
-  glAttachShader(r.program, fs);
-  glLinkProgram(r.program);
+  const GlApi& gl = r.gl;
+  const GLuint vs = Compile(gl, GL_VERTEX_SHADER, kVertexShader);
+  const GLuint fs = Compile(gl, GL_FRAGMENT_SHADER, kFragmentShader);
+  r.program = gl.CreateProgram();
+  gl.AttachShader(r.program, vs);
+  gl.AttachShader(r.program, fs);
+  gl.LinkProgram(r.program);
   GLint ok = 0;
-  glGetProgramiv(r.program, GL_LINK_STATUS, &ok);
+  gl.GetProgramiv(r.program, GL_LINK_STATUS, &ok);
   if (!ok) throw std::runtime_error("renderer: shader program does not link");
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  r.u_model_cam = glGetUniformLocation(r.program, "u_model_cam");
-  r.u_proj = glGetUniformLocation(r.program, "u_proj");
-  r.u_color = glGetUniformLocation(r.program, "u_color");
-  r.u_use_texture = glGetUniformLocation(r.program, "u_use_texture");
-  r.u_tex = glGetUniformLocation(r.program, "u_tex");
-  r.u_label = glGetUniformLocation(r.program, "u_label");
-  r.u_unlit = glGetUniformLocation(r.program, "u_unlit");
-  r.u_light = glGetUniformLocation(r.program, "u_light_c");
+  gl.DeleteShader(vs);
+  gl.DeleteShader(fs);
+  r.u_model_cam = gl.GetUniformLocation(r.program, "u_model_cam");
+  r.u_proj = gl.GetUniformLocation(r.program, "u_proj");
+  r.u_color = gl.GetUniformLocation(r.program, "u_color");
+  r.u_use_texture = gl.GetUniformLocation(r.program, "u_use_texture");
+  r.u_tex = gl.GetUniformLocation(r.program, "u_tex");
+  r.u_label = gl.GetUniformLocation(r.program, "u_label");
+  r.u_unlit = gl.GetUniformLocation(r.program, "u_unlit");
+  r.u_light = gl.GetUniformLocation(r.program, "u_light_c");
 }
 
 Renderer::~Renderer() {
-  if (impl_->ctx) OSMesaDestroyContext(impl_->ctx);
+  if (impl_->ctx) impl_->gl.DestroyContext(impl_->ctx);
 }
 
 std::string Renderer::Description() const {
   impl_->MakeCurrent();
-  const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  const GlApi& gl = impl_->gl;
+  const auto* renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
+  const auto* version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
   return std::string("OSMesa: ") + (renderer ? renderer : "?") + ", OpenGL " +
          (version ? version : "?");
 }
@@ -234,6 +330,7 @@ std::size_t Renderer::num_meshes() const { return impl_->meshes.size(); }
 
 int Renderer::AddMesh(const TriangleMesh& mesh) {
   impl_->MakeCurrent();
+  const GlApi& gl = impl_->gl;
   GpuMesh g;
   g.rgba = mesh.material.rgba;
   g.bounds = mesh.Bounds();
@@ -252,27 +349,27 @@ int Renderer::AddMesh(const TriangleMesh& mesh) {
   indices.reserve(mesh.triangles.size() * 3);
   for (const auto& t : mesh.triangles)
     for (int k = 0; k < 3; ++k) indices.push_back(static_cast<std::uint32_t>(t[k]));
-  glGenVertexArrays(1, &g.vao);
-  glBindVertexArray(g.vao);
-  glGenBuffers(1, &g.vbo);
-  glBindBuffer(GL_ARRAY_BUFFER, g.vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
-               GL_STATIC_DRAW);
-  glGenBuffers(1, &g.ebo);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(),
-               GL_STATIC_DRAW);
+  gl.GenVertexArrays(1, &g.vao);
+  gl.BindVertexArray(g.vao);
+  gl.GenBuffers(1, &g.vbo);
+  gl.BindBuffer(GL_ARRAY_BUFFER, g.vbo);
+  gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
+                GL_STATIC_DRAW);
+  gl.GenBuffers(1, &g.ebo);
+  gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
+  gl.BufferData(GL_ELEMENT_ARRAY_BUFFER,
+                static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(),
+                GL_STATIC_DRAW);
   const GLsizei stride = 8 * sizeof(float);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(3 * sizeof(float)));
-  glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(6 * sizeof(float)));
-  glBindVertexArray(0);
+  gl.EnableVertexAttribArray(0);
+  gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
+  gl.EnableVertexAttribArray(1);
+  gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride,
+                         reinterpret_cast<void*>(3 * sizeof(float)));
+  gl.EnableVertexAttribArray(2);
+  gl.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride,
+                         reinterpret_cast<void*>(6 * sizeof(float)));
+  gl.BindVertexArray(0);
   g.count = static_cast<GLsizei>(indices.size());
   if (mesh.material.HasTexture() && has_uv) g.texture = impl_->Texture(mesh.material);
   impl_->meshes.push_back(g);
@@ -281,37 +378,38 @@ int Renderer::AddMesh(const TriangleMesh& mesh) {
 
 void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and_labels) {
   Impl& r = *impl_;
+  const GlApi& gl = r.gl;
   r.MakeCurrent();
   const int W = scene.K.width, H = scene.K.height;
   r.EnsureFramebuffer(W, H);
-  glBindFramebuffer(GL_FRAMEBUFFER, r.fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.fbo);
   const GLenum buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-  glDrawBuffers(3, buffers);
-  glViewport(0, 0, W, H);
-  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glColorMaski(2, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glDepthMask(GL_TRUE);
+  gl.DrawBuffers(3, buffers);
+  gl.Viewport(0, 0, W, H);
+  gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl.ColorMaski(2, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl.DepthMask(GL_TRUE);
   const float bg[4] = {static_cast<float>(scene.background.x()),
                        static_cast<float>(scene.background.y()),
                        static_cast<float>(scene.background.z()), 1.0f};
   const GLuint zero_label[4] = {0, 0, 0, 0};
   const float zero_depth[4] = {0, 0, 0, 0};
-  glClearBufferfv(GL_COLOR, 0, bg);
-  glClearBufferuiv(GL_COLOR, 1, zero_label);
-  glClearBufferfv(GL_COLOR, 2, zero_depth);
-  glClear(GL_DEPTH_BUFFER_BIT);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDisable(GL_CULL_FACE);
-  glUseProgram(r.program);
+  gl.ClearBufferfv(GL_COLOR, 0, bg);
+  gl.ClearBufferuiv(GL_COLOR, 1, zero_label);
+  gl.ClearBufferfv(GL_COLOR, 2, zero_depth);
+  gl.Clear(GL_DEPTH_BUFFER_BIT);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LESS);
+  gl.Disable(GL_CULL_FACE);
+  gl.UseProgram(r.program);
 
   const Eigen::Matrix4f proj = ProjectionMatrix(scene.K, scene.near, scene.far).cast<float>();
-  glUniformMatrix4fv(r.u_proj, 1, GL_FALSE, proj.data());
+  gl.UniformMatrix4fv(r.u_proj, 1, GL_FALSE, proj.data());
   const Eigen::Vector3f light =
       Eigen::Vector3f(-0.35f, -0.6f, -0.7f).normalized();  // above-left of the camera
-  glUniform3f(r.u_light, light.x(), light.y(), light.z());
-  glUniform1i(r.u_tex, 0);
+  gl.Uniform3f(r.u_light, light.x(), light.y(), light.z());
+  gl.Uniform1i(r.u_tex, 0);
   const Transform T_CP = scene.T_PC.inverse();
 
   // Opaque first; translucent sorted back to front by their centre's depth.
@@ -319,20 +417,20 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
   const auto draw = [&](const SceneItem& item) {
     const GpuMesh& g = r.meshes.at(static_cast<std::size_t>(item.mesh));
     const Eigen::Matrix4f model_cam = (T_CP * item.T_PM).matrix().cast<float>();
-    glUniformMatrix4fv(r.u_model_cam, 1, GL_FALSE, model_cam.data());
+    gl.UniformMatrix4fv(r.u_model_cam, 1, GL_FALSE, model_cam.data());
     Eigen::Vector4d c = item.rgba ? *item.rgba : g.rgba;
     c[3] *= item.opacity;
-    glUniform4f(r.u_color, static_cast<float>(c[0]), static_cast<float>(c[1]),
-                static_cast<float>(c[2]), static_cast<float>(c[3]));
-    glUniform1i(r.u_use_texture, g.texture && !item.rgba ? 1 : 0);
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, g.texture);
-    glUniform1ui(r.u_label, item.label);
-    glUniform1i(r.u_unlit, item.unlit ? 1 : 0);
-    glBindVertexArray(g.vao);
-    glDrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
+    gl.Uniform4f(r.u_color, static_cast<float>(c[0]), static_cast<float>(c[1]),
+                 static_cast<float>(c[2]), static_cast<float>(c[3]));
+    gl.Uniform1i(r.u_use_texture, g.texture && !item.rgba ? 1 : 0);
+    gl.ActiveTexture(GL_TEXTURE0);
+    gl.BindTexture(GL_TEXTURE_2D, g.texture);
+    gl.Uniform1ui(r.u_label, item.label);
+    gl.Uniform1i(r.u_unlit, item.unlit ? 1 : 0);
+    gl.BindVertexArray(g.vao);
+    gl.DrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
   };
-  glDisablei(GL_BLEND, 0);
+  gl.Disablei(GL_BLEND, 0);
   for (const SceneItem& item : scene.items) {
     const GpuMesh& g = r.meshes.at(static_cast<std::size_t>(item.mesh));
     const double alpha = (item.rgba ? (*item.rgba)[3] : g.rgba[3]) * item.opacity;
@@ -345,82 +443,83 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
   if (!translucent.empty()) {
     std::stable_sort(translucent.begin(), translucent.end(),
                      [](const auto& a, const auto& b) { return a.first > b.first; });
-    glEnablei(GL_BLEND, 0);
-    glBlendFunci(0, GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-    glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-    glColorMaski(2, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-    glDepthMask(GL_FALSE);
+    gl.Enablei(GL_BLEND, 0);
+    gl.BlendFunci(0, GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    gl.ColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    gl.ColorMaski(2, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    gl.DepthMask(GL_FALSE);
     for (const auto& [depth, item] : translucent) draw(*item);
-    glDepthMask(GL_TRUE);
-    glDisablei(GL_BLEND, 0);
+    gl.DepthMask(GL_TRUE);
+    gl.Disablei(GL_BLEND, 0);
   }
-  glBindVertexArray(0);
+  gl.BindVertexArray(0);
 
   // Read back straight into the output: the projection put the top image row first.
   out.width = W;
   out.height = H;
   if (out.colour.width != W || out.colour.height != H || out.colour.channels != 3)
     out.colour = Image8(W, H, 3);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_COLOR_ATTACHMENT0);
-  glReadPixels(0, 0, W, H, GL_RGB, GL_UNSIGNED_BYTE, out.colour.data.data());
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl.ReadPixels(0, 0, W, H, GL_RGB, GL_UNSIGNED_BYTE, out.colour.data.data());
   if (with_depth_and_labels) {
     out.depth.resize(std::size_t(W) * H);
     out.label.resize(std::size_t(W) * H);
-    glReadBuffer(GL_COLOR_ATTACHMENT2);
-    glReadPixels(0, 0, W, H, GL_RED, GL_FLOAT, out.depth.data());
+    gl.ReadBuffer(GL_COLOR_ATTACHMENT2);
+    gl.ReadPixels(0, 0, W, H, GL_RED, GL_FLOAT, out.depth.data());
     for (float& z : out.depth)
       if (!(z > 0.0f)) z = std::numeric_limits<float>::infinity();
-    glReadBuffer(GL_COLOR_ATTACHMENT1);
-    glReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, out.label.data());
+    gl.ReadBuffer(GL_COLOR_ATTACHMENT1);
+    gl.ReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, out.label.data());
   } else {
     out.depth.clear();
     out.label.clear();
   }
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 void Renderer::RenderMasks(const Scene& scene, std::vector<std::uint16_t>& bits) {
   Impl& r = *impl_;
+  const GlApi& gl = r.gl;
   r.MakeCurrent();
   const int W = scene.K.width, H = scene.K.height;
   r.EnsureFramebuffer(W, H);
-  glBindFramebuffer(GL_FRAMEBUFFER, r.fbo);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.fbo);
   const GLenum buffers[3] = {GL_NONE, GL_COLOR_ATTACHMENT1, GL_NONE};  // the labels only
-  glDrawBuffers(3, buffers);
-  glViewport(0, 0, W, H);
-  glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl.DrawBuffers(3, buffers);
+  gl.Viewport(0, 0, W, H);
+  gl.ColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   const GLuint zero_label[4] = {0, 0, 0, 0};
-  glClearBufferuiv(GL_COLOR, 1, zero_label);
-  glDisable(GL_DEPTH_TEST);
-  glDepthMask(GL_FALSE);
-  glDisable(GL_CULL_FACE);
-  glDisablei(GL_BLEND, 0);
-  glEnable(GL_COLOR_LOGIC_OP);  // integer targets: the labels are OR-ed
-  glLogicOp(GL_OR);
-  glUseProgram(r.program);
+  gl.ClearBufferuiv(GL_COLOR, 1, zero_label);
+  gl.Disable(GL_DEPTH_TEST);
+  gl.DepthMask(GL_FALSE);
+  gl.Disable(GL_CULL_FACE);
+  gl.Disablei(GL_BLEND, 0);
+  gl.Enable(GL_COLOR_LOGIC_OP);  // integer targets: the labels are OR-ed
+  gl.LogicOp(GL_OR);
+  gl.UseProgram(r.program);
   const Eigen::Matrix4f proj = ProjectionMatrix(scene.K, scene.near, scene.far).cast<float>();
-  glUniformMatrix4fv(r.u_proj, 1, GL_FALSE, proj.data());
-  glUniform1i(r.u_use_texture, 0);
-  glUniform1i(r.u_unlit, 1);
+  gl.UniformMatrix4fv(r.u_proj, 1, GL_FALSE, proj.data());
+  gl.Uniform1i(r.u_use_texture, 0);
+  gl.Uniform1i(r.u_unlit, 1);
   const Transform T_CP = scene.T_PC.inverse();
   for (const SceneItem& item : scene.items) {
     const GpuMesh& g = r.meshes.at(static_cast<std::size_t>(item.mesh));
     const Eigen::Matrix4f model_cam = (T_CP * item.T_PM).matrix().cast<float>();
-    glUniformMatrix4fv(r.u_model_cam, 1, GL_FALSE, model_cam.data());
-    glUniform1ui(r.u_label, item.label);
-    glBindVertexArray(g.vao);
-    glDrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
+    gl.UniformMatrix4fv(r.u_model_cam, 1, GL_FALSE, model_cam.data());
+    gl.Uniform1ui(r.u_label, item.label);
+    gl.BindVertexArray(g.vao);
+    gl.DrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
   }
-  glBindVertexArray(0);
-  glDisable(GL_COLOR_LOGIC_OP);
-  glDepthMask(GL_TRUE);
-  glEnable(GL_DEPTH_TEST);
+  gl.BindVertexArray(0);
+  gl.Disable(GL_COLOR_LOGIC_OP);
+  gl.DepthMask(GL_TRUE);
+  gl.Enable(GL_DEPTH_TEST);
   bits.resize(std::size_t(W) * H);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_COLOR_ATTACHMENT1);
-  glReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, bits.data());
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.ReadBuffer(GL_COLOR_ATTACHMENT1);
+  gl.ReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, bits.data());
+  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 }  // namespace inhand

@@ -43,7 +43,9 @@ struct RenderOutput {
 
 class Renderer {
  public:
-  // Creates an OSMesa OpenGL 3.3 core context. Throws std::runtime_error when impossible.
+  // Creates an OSMesa OpenGL 3.3 core context, loading OSMesa on the first renderer of the
+  // process (osmesa.hpp). Throws InputError without the library, std::runtime_error when the
+  // context cannot be made.
   Renderer();
   ~Renderer();
   Renderer(const Renderer&) = delete;
