@@ -247,27 +247,46 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   only_gaps.cones = only_gaps.features = only_gaps.axes = only_gaps.uncertainty = false;
   only_gaps.hud = false;
   Image8 external = painter_->Paint(cues, only_gaps);
-  // SideBySide scales every panel to the camera's height.
-  const double to_height = static_cast<double>(annotated.height);
-  external_view_ = {
-      true, outside.T_PC, outside.K,
-      annotated.width + static_cast<int>(std::lround(middle->width * to_height / middle->height)),
-      to_height / external.height};
   AddSideView(st, external);
   const bool truth = s.has_groundtruth();
-  return SideBySide(
-      {&annotated, middle, &external},
-      {truth ? "camera + estimates (truth dashed)" : "camera + estimates (no ground truth)",
-       virtual_caption,
-       std::string(truth ? "3-D view: truth dark, estimates translucent"
-                         : "3-D view: estimates translucent") +
-           ", finger gaps to " + p_.sets()[last].name});
+  const std::string camera_caption =
+      truth ? "camera + estimates (truth dashed)" : "camera + estimates (no ground truth)";
+  const std::string external_caption =
+      std::string(truth ? "3-D view: truth dark, estimates translucent"
+                        : "3-D view: estimates translucent") +
+      ", finger gaps to " + p_.sets()[last].name;
+  if (layout == Layout::kCameraLarge) {
+    // MainAndColumn scales the column's panels to half the camera's height.
+    const int half = annotated.height / 2;
+    const double scale = static_cast<double>(half) / external.height;
+    external_view_ = {true,      outside.T_PC,
+                      outside.K, annotated.width,
+                      half,      static_cast<int>(std::lround(external.width * scale)),
+                      half,      scale};
+    return MainAndColumn(annotated, {middle, &external},
+                         {camera_caption, virtual_caption, external_caption});
+  }
+  // SideBySide scales every panel to the camera's height.
+  const double to_height = static_cast<double>(annotated.height);
+  const int x0 =
+      annotated.width + static_cast<int>(std::lround(middle->width * to_height / middle->height));
+  const double scale = to_height / external.height;
+  external_view_ = {true,
+                    outside.T_PC,
+                    outside.K,
+                    x0,
+                    0,
+                    static_cast<int>(std::lround(external.width * scale)),
+                    annotated.height,
+                    scale};
+  return SideBySide({&annotated, middle, &external},
+                    {camera_caption, virtual_caption, external_caption});
 }
 
 Image8 FrameComposer::ComposeExternal(const PictureState& st, int width, int height,
                                       const OverlayLayers& layers) {
   const Scene scene = ExternalScene(st, IntrinsicsFromFov(width, height, 40.0), orbit);
-  external_view_ = {true, scene.T_PC, scene.K, 0, 1.0};
+  external_view_ = {true, scene.T_PC, scene.K, 0, 0, width, height, 1.0};
   RenderOutput out;
   renderer_.Render(scene, out, false);
   OverlayFrame of;

@@ -106,7 +106,10 @@ struct GuiState {
   bool Hidden(std::size_t set) const { return set < hidden.size() && hidden[set]; }
   // The layout (splitters), kept in the user's configuration folder (GuiLayout).
   float panel_width = 330.0f;  // [px] the left panel
-  float picture_share = 1.0f;  // of the views' width, the composed picture's (its aspect kept)
+  // Of the views' width, the composed picture's (its aspect kept). By default the camera panel
+  // (two thirds of the picture) is half the views' width and the picture leaves the timeline and
+  // plots most of the height.
+  float picture_share = 0.75f;
   bool layout_changed = false;
 };
 
@@ -182,6 +185,7 @@ class Runner {
   void Restart() {
     player_ = std::make_unique<SessionPlayer>(session_, state_.params, state_.sets);
     composer_ = std::make_unique<FrameComposer>(*player_);
+    composer_->layout = FrameComposer::Layout::kCameraLarge;
     ForgetVisual();
     next_ = 0;
     last_frame_ = -1;
@@ -1621,7 +1625,7 @@ bool PicturePixel(Runner& runner, int panel, const Vec3& X_P, Vec2& pixel) {
   if (!v.valid) return false;
   const Vec3 X_C = v.T_PC.inverse() * X_P;
   if (X_C.z() <= 1e-6) return false;
-  pixel = Vec2(v.x0, 0.0) + v.scale * v.K.Project(X_C);
+  pixel = Vec2(v.x0, v.y0) + v.scale * v.K.Project(X_C);
   return true;
 }
 
@@ -2098,8 +2102,10 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
   const Session& shown = runner.player().session();
   ImGui::TextUnformatted(!shown.info().camera ? "3-D view (the session has no camera)"
                          : shown.has_groundtruth()
-                             ? "camera + estimates (truth dashed) | virtual view | 3-D view"
-                             : "camera + estimates (no ground truth) | virtual view | 3-D view");
+                             ? "camera + estimates (truth dashed); on its right the virtual view "
+                               "and the 3-D view"
+                             : "camera + estimates (no ground truth); on its right the virtual "
+                               "view and the 3-D view");
   tex.picture.Show(avail * state.picture_share);
   const bool picture_hovered = ImGui::IsItemHovered();
   const ImVec2 picture_min = ImGui::GetItemRectMin(), picture_max = ImGui::GetItemRectMax();
@@ -2129,8 +2135,13 @@ void DrawViews(Runner& runner, GuiState& state, const Textures& tex, int width, 
   }
   if (picture_hovered) {
     const ImGuiIO& io = ImGui::GetIO();
-    const ImVec2 min = picture_min, max = picture_max;
-    const bool over_3d = io.MousePos.x > min.x + 2.0f * (max.x - min.x) / 3.0f;
+    // Over the 3-D view: where the composer last drew it, in the picture's pixels.
+    const FrameComposer::ExternalView& v = runner.external_view();
+    const double scale = tex.picture.width / static_cast<double>(picture_max.x - picture_min.x);
+    const double u = (io.MousePos.x - picture_min.x) * scale,
+                 w = (io.MousePos.y - picture_min.y) * scale;
+    const bool over_3d =
+        v.valid && u >= v.x0 && u < v.x0 + v.width && w >= v.y0 && w < v.y0 + v.height;
     if (over_3d && ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
       state.orbit.azimuth -= 0.01 * io.MouseDelta.x;
       state.orbit.elevation = std::clamp(state.orbit.elevation + 0.01 * io.MouseDelta.y, -1.5, 1.5);

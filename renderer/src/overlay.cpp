@@ -1,9 +1,14 @@
 #include "inhand/renderer/overlay.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "cv_colour.hpp"
 #include "inhand/core/error.hpp"
@@ -344,6 +349,63 @@ Image8 SideBySide(const std::vector<const Image8*>& images,
     cv::copyMakeBorder(all, all, 0, 0, 0, 1, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
   if (all.rows % 2)
     cv::copyMakeBorder(all, all, 0, 1, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+  Image8 out(all.cols, all.rows, 3);
+  std::memcpy(out.data.data(), all.data, out.data.size());
+  return out;
+}
+
+Image8 MainAndColumn(const Image8& main, const std::vector<const Image8*>& column,
+                     const std::vector<std::string>& captions) {
+  INHAND_CHECK(!main.empty() && !column.empty(), "MainAndColumn needs images");
+  const int H = main.height;
+  const int h = H / static_cast<int>(column.size());
+  int column_width = 0;
+  std::vector<cv::Mat> tiles;
+  for (const Image8* im : column) {
+    const cv::Mat m(im->height, im->width, CV_8UC3, const_cast<std::uint8_t*>(im->data.data()));
+    cv::Mat scaled;
+    cv::resize(
+        m, scaled,
+        cv::Size(std::max(1, static_cast<int>(std::lround(im->width * double(h) / im->height))), h),
+        0, 0, cv::INTER_AREA);
+    column_width = std::max(column_width, scaled.cols);
+    tiles.push_back(scaled);
+  }
+  const int W = (main.width + column_width + 1) / 2 * 2;
+  cv::Mat all(H + H % 2, W, CV_8UC3, cv::Scalar(0, 0, 0));
+  const cv::Mat m(main.height, main.width, CV_8UC3, const_cast<std::uint8_t*>(main.data.data()));
+  m.copyTo(all(cv::Rect(0, 0, main.width, H)));
+  constexpr double kScale = 0.45;
+  constexpr int kLine = 18;
+  if (!captions.empty() && !captions[0].empty()) {
+    cv::rectangle(all, cv::Rect(0, 0, main.width, 20), cv::Scalar(30, 30, 30), cv::FILLED);
+    cv::putText(all, captions[0], cv::Point(6, 14), cv::FONT_HERSHEY_SIMPLEX, kScale,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  }
+  for (std::size_t i = 0; i < tiles.size(); ++i) {
+    cv::Mat tile = tiles[i];
+    if (i + 1 < captions.size() && !captions[i + 1].empty()) {
+      // Words as long as they fit the tile, then a new line.
+      std::vector<std::string> lines(1);
+      std::istringstream words(captions[i + 1]);
+      for (std::string word; words >> word;) {
+        const std::string longer = lines.back().empty() ? word : lines.back() + " " + word;
+        int base = 0;
+        if (lines.back().empty() ||
+            cv::getTextSize(longer, cv::FONT_HERSHEY_SIMPLEX, kScale, 1, &base).width + 12 <=
+                tile.cols)
+          lines.back() = longer;
+        else
+          lines.push_back(word);
+      }
+      const int bar = std::min(tile.rows, kLine * static_cast<int>(lines.size()) + 4);
+      cv::rectangle(tile, cv::Rect(0, 0, tile.cols, bar), cv::Scalar(30, 30, 30), cv::FILLED);
+      for (std::size_t l = 0; l < lines.size(); ++l)
+        cv::putText(tile, lines[l], cv::Point(6, 14 + kLine * static_cast<int>(l)),
+                    cv::FONT_HERSHEY_SIMPLEX, kScale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    }
+    tile.copyTo(all(cv::Rect(main.width, static_cast<int>(i) * h, tile.cols, tile.rows)));
+  }
   Image8 out(all.cols, all.rows, 3);
   std::memcpy(out.data.data(), all.data, out.data.size());
   return out;

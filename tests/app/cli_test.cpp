@@ -824,7 +824,8 @@ TEST(Gui, RealWindowUnderXvfb) {
 
 // The timeline under the views (issue 37): a script (gui --script) waits for the whole session's
 // events, seeks, clicks the jt lane at 3.5 s (the timeline spans the window's width beside the
-// 330-px panel: 1 s at x 378, 6 s at x 1268) and jumps with ] and [ from event to event; the
+// 330-px panel and the scroll bar: 1 s at x 378, 6 s at x 1254; the picture above it is 350 px
+// high) and jumps with ] and [ from event to event; the
 // times it reaches are those of replay's events.csv. A wheel notch over the timeline zooms the
 // window the plots share about the mouse, and a click half-way across a plot seeks there. The
 // arrows step a joint sample, with shift a camera frame.
@@ -854,12 +855,12 @@ TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
       "expect events any %zu\n"
       "expect events contact_made 4\n"
       "seek 2.0\nwait 2\nexpect time 2.0 0.001\n"
-      "click 823 300   # the jt lane, 3.5 s\nwait 2\nexpect time 3.5 0.03\n"
+      "click 816 417   # the jt lane, 3.5 s\nwait 2\nexpect time 3.5 0.03\n"
       "seek %.17g\nwait 2\nkey ]\nwait 2\nexpect time %.17g 1e-9\n"
       "key ]\nwait 2\nexpect time %.17g 1e-9\n"
       "key [\nwait 2\nexpect time %.17g 1e-9\n"
-      "scroll 823 300 1   # zoom about 3.5 s by 0.8\nwait 2\nexpect window 1.5 5.5 0.05\n"
-      "click 592 420   # the position error plot, half-way: 3.5 s\nwait 2\n"
+      "scroll 816 417 1   # zoom about 3.5 s by 0.8\nwait 2\nexpect window 1.5 5.5 0.05\n"
+      "click 588 537   # the position error plot, half-way: 3.5 s\nwait 2\n"
       "expect time 3.5 0.03\n"
       "seek 3.0\nwait 2\npress right\nwait 1\nexpect time 3.002 1e-9\n"
       "press shift+right   # the next camera frame (10 Hz)\nwait 1\nexpect time 3.1 1e-9\n"
@@ -907,18 +908,19 @@ TEST(Gui, AScriptSeeksByTheTimelineAndJumpsFromEventToEvent) {
 // The layout (issue 37): the splitter between the panel and the views and the one under the
 // picture move them when dragged; the layout is kept in the user's configuration folder (never
 // in the session) and the next session opens with it; a file that is not a layout is reported
-// by name and the defaults are used. Offscreen, 1280x800: the panel's border at x 330, the
-// picture's lower edge at y 235.
+// by name and the defaults are used. Offscreen, 1280x800: the panel's border at x 330; by default
+// the picture takes 0.75 of the views' width (the camera panel half), and with the panel at 430
+// px (and the plots' scroll bar) its lower edge lies at y 333, the splitter just under it.
 TEST(Gui, SplittersMoveAndTheLayoutIsKeptInTheUsersConfiguration) {
   INHAND_REQUIRE_GUI();
   test::TempDir dir;
   const std::string env = "env -u DISPLAY XDG_CONFIG_HOME=" + (dir / "config");
   const std::string layout = dir / "config/inhand/gui.json";
   std::ofstream(dir / "drag.script")
-      << "wait 3\nexpect panel 330 0.5\nexpect picture 1 1e-6\n"
+      << "wait 3\nexpect panel 330 0.5\nexpect picture 0.75 1e-6\n"
          "drag 330 400 430 400\nwait 2\nexpect panel 430 2\n"
-         "drag 900 237 900 177   # the picture's splitter, 60 px up\nwait 2\n"
-         "expect picture 0.72 0.04\nscreenshot "
+         "drag 900 339 900 279   # the picture's splitter, 60 px up\nwait 2\n"
+         "expect picture 0.61 0.04\nscreenshot "
       << (dir / "dragged.png") << "\n";
   const test::CommandResult dragged =
       test::RunInhand("gui " + ShortSession() + " --script " + (dir / "drag.script"), env);
@@ -928,7 +930,7 @@ TEST(Gui, SplittersMoveAndTheLayoutIsKeptInTheUsersConfiguration) {
   const Json saved = Json::parse(test::ReadFile(layout));
   EXPECT_NEAR(saved.at("panel_width").get<double>(), 430.0, 2.0);
   const double share = saved.at("picture_share").get<double>();
-  EXPECT_NEAR(share, 0.72, 0.04);
+  EXPECT_NEAR(share, 0.61, 0.04);
   for (const auto& entry : std::filesystem::recursive_directory_iterator(ShortSession()))
     EXPECT_NE(entry.path().filename(), "gui.json") << "the layout never goes into the session";
   // The next session opens with it.
@@ -942,7 +944,8 @@ TEST(Gui, SplittersMoveAndTheLayoutIsKeptInTheUsersConfiguration) {
   EXPECT_EQ(reopened.output.find("FAILED"), std::string::npos) << reopened.output;
   // A file that is not a layout: named, the defaults used, the file left as it was.
   std::ofstream(layout) << "{\"panel_width\": \"wide\"}";
-  std::ofstream(dir / "default.script") << "wait 3\nexpect panel 330 0.5\nexpect picture 1 1e-6\n";
+  std::ofstream(dir / "default.script")
+      << "wait 3\nexpect panel 330 0.5\nexpect picture 0.75 1e-6\n";
   const test::CommandResult broken =
       test::RunInhand("gui " + ShortSession() + " --script " + (dir / "default.script"), env);
   EXPECT_EQ(broken.exit_code, 0) << broken.output;
@@ -995,7 +998,7 @@ TEST(Gui, TheInspectorSelectsWhatWasClickedAndShowsItsHistory) {
                 "seek 0.5\nwait 2\nexpect contact none\n"
                 "seek 2.5\nwait 3\nscreenshot %s\n"
                 "select jtf middle_distal\nwait 3\nexpect selected jtf/middle_distal\n"
-                "click 830 428   # the visual table's first row\nwait 3\n"
+                "click 830 545   # the visual table's first row\nwait 3\n"
                 "expect selected jtf/visual:0\n",
                 made->t, made->subject.c_str(), made->subject.c_str(), (dir / "plain.png").c_str());
   const std::string first = run(script, "env -u DISPLAY");
@@ -1005,7 +1008,9 @@ TEST(Gui, TheInspectorSelectsWhatWasClickedAndShowsItsHistory) {
   ASSERT_TRUE(std::isfinite(feature[0]) && std::isfinite(contact[0]) &&
               std::isfinite(contact_3d[0]))
       << first;
-  EXPECT_GT(contact_3d[0], 1280.0);  // the third panel
+  // The 3-D view: below the virtual view, right of the 640x480 camera panel.
+  EXPECT_GT(contact_3d[0], 640.0);
+  EXPECT_GT(contact_3d[1], 240.0);
   std::snprintf(script, sizeof script,
                 "seek 2.5\nwait 3\nclick-camera %.3f %.3f\nwait 3\nexpect selected jtf/visual:0\n"
                 "click-picture %.3f %.3f   # the 3-D view\nwait 3\n"
@@ -1023,18 +1028,22 @@ TEST(Gui, TheInspectorSelectsWhatWasClickedAndShowsItsHistory) {
     run(script, runner);
   }
   // The ring: in the camera panel and in the 3-D view, the picture with the selection differs
-  // from the one without only around where the contact is drawn (the picture's 1920 px shown in
-  // the views' width).
+  // from the one without only around where the contact is drawn (the picture's 960 px, camera
+  // 640x480 and the column's two 320x240 views, shown in 0.75 of the views' width, less the
+  // 14-px scroll bar the plots under it bring).
   const Image8 plain = ReadImage(dir / "plain.png"), selected = ReadImage(dir / "selected.png");
   ExpectInterface(selected);
-  const double scale = (1280 - 330 - 16) / 1920.0;
+  const double scale = 0.75 * (1280 - 330 - 16 - 14) / 960.0;
   for (const auto& at : {contact, contact_3d}) {
     const int panel = at[0] < 640 ? 0 : 2;
+    // The panel's rectangle in the picture, then in the window.
+    const double u0 = panel == 0 ? 0 : 640, u1 = panel == 0 ? 640 : 960;
+    const double v0 = panel == 0 ? 0 : 240, v1 = 480;
     int changed = 0;
     double cx = 0, cy = 0;
-    for (int y = 25; y < 262; ++y)
-      for (int x = 335 + static_cast<int>(panel * 640 * scale);
-           x < 335 + static_cast<int>((panel + 1) * 640 * scale); ++x) {
+    for (int y = 25 + static_cast<int>(v0 * scale); y < 33 + static_cast<int>(v1 * scale); ++y)
+      for (int x = 335 + static_cast<int>(u0 * scale); x < 341 + static_cast<int>(u1 * scale);
+           ++x) {
         const std::uint8_t *a = plain.pixel(x, y), *b = selected.pixel(x, y);
         if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) > 60)
           ++changed, cx += x, cy += y;

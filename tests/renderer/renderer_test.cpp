@@ -550,5 +550,36 @@ TEST(ImageCompare, CountsDifferencesAndRejectsSizeMismatch) {
   EXPECT_THROW(CompareImages(a, Image8(10, 11, 3), 0), InputError);
 }
 
+// The GUI's layout: the main image untouched at its size, the column's two images at half its
+// height on its right (uniform colours keep their value through the resize), a caption too long
+// for a column panel broken onto a second line inside it.
+TEST(Overlay, MainAndColumnKeepsTheMainImageAndStacksTheOthers) {
+  Image8 main(64, 48, 3), top(64, 48, 3), bottom(32, 24, 3);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) main.pixel(x, y)[c] = static_cast<std::uint8_t>(x + y + 10 * c);
+  std::fill(top.data.begin(), top.data.end(), 200);
+  std::fill(bottom.data.begin(), bottom.data.end(), 90);
+  const Image8 all = MainAndColumn(main, {&top, &bottom});
+  ASSERT_EQ(all.width, 96);
+  ASSERT_EQ(all.height, 48);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      ASSERT_EQ(all.pixel(x, y)[1], main.pixel(x, y)[1]) << x << " " << y;
+  EXPECT_EQ(all.pixel(80, 12)[0], 200);
+  EXPECT_EQ(all.pixel(80, 36)[0], 90);
+  // Captions: one bar over the main image, two lines over the narrow top panel.
+  const Image8 captioned = MainAndColumn(Image8(400, 300, 3), {&top, &bottom},
+                                         {"main", "a caption far too long for one line", ""});
+  const auto dark_rows = [&](int x) {
+    int rows = 0;
+    while (rows < captioned.height && captioned.pixel(x, rows)[0] == 30) ++rows;
+    return rows;
+  };
+  EXPECT_EQ(dark_rows(399), 20);
+  EXPECT_GE(dark_rows(598), 36);
+  EXPECT_EQ(captioned.pixel(598, 200)[0], 90);
+}
+
 }  // namespace
 }  // namespace inhand

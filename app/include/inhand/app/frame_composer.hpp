@@ -87,14 +87,20 @@ class FrameComposer {
     int link = -1;
     int visual = -1;
   } selection;
+  // How Compose lays its three pictures out: in a row at the camera's height (the replay video,
+  // like the paper's Fig. 1), or the camera at its own size with the virtual view and the 3-D view
+  // stacked on its right at half its height (the GUI: the camera, the evidence, gets the largest
+  // share).
+  enum class Layout { kRow, kCameraLarge } layout = Layout::kRow;
   // Where the last picture drew its external 3-D view: the view's camera (palm frame), its
-  // intrinsics, its left edge in the picture [px] and the scale it was drawn at (valid: a picture
+  // intrinsics, its rectangle in the picture [px] and the scale it was drawn at (valid: a picture
   // has been composed). The GUI maps a click on it back to the contact drawn there.
   struct ExternalView {
     bool valid = false;
     Transform T_PC = Transform::Identity();
     Intrinsics K;
-    int x0 = 0;
+    int x0 = 0, y0 = 0;
+    int width = 0, height = 0;
     double scale = 1.0;
   };
   const ExternalView& last_external_view() const { return external_view_; }

@@ -114,4 +114,10 @@ void Inset(Image8& big, const Image8& small, const std::string& caption);
 Image8 SideBySide(const std::vector<const Image8*>& images,
                   const std::vector<std::string>& captions = {});
 
+// `main` at its own size on the left; the images of `column` stacked on its right, each scaled to
+// 1/n of its height (n of them), their captions broken between words to fit. captions[0] is
+// main's, then the column's in order. Even sizes (H.264).
+Image8 MainAndColumn(const Image8& main, const std::vector<const Image8*>& column,
+                     const std::vector<std::string>& captions = {});
+
 }  // namespace inhand
