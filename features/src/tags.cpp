@@ -3,6 +3,7 @@
 #include <apriltag/apriltag.h>
 #include <apriltag/common/image_u8.h>
 #include <apriltag/common/pjpeg.h>
+#include <apriltag/common/zarray.h>
 #include <apriltag/tag16h5.h>
 #include <apriltag/tag25h9.h>
 #include <apriltag/tag36h11.h>
@@ -16,7 +17,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "inhand/core/error.hpp"
 #include "inhand/sessions/image_io.hpp"
@@ -44,20 +48,40 @@ void TagDetectorParams::Validate() const {
 
 namespace {
 
-struct Family {
-  apriltag_family_t* family = nullptr;
-  void (*destroy)(apriltag_family_t*) = nullptr;
-};
-
-Family CreateFamily(const std::string& f) {
-  if (f == "tag36h11") return {tag36h11_create(), tag36h11_destroy};
-  if (f == "tag25h9") return {tag25h9_create(), tag25h9_destroy};
-  if (f == "tag16h5") return {tag16h5_create(), tag16h5_destroy};
-  if (f == "tagStandard41h12") return {tagStandard41h12_create(), tagStandard41h12_destroy};
-  if (f == "tagCircle21h7") return {tagCircle21h7_create(), tagCircle21h7_destroy};
+apriltag_family_t* CreateFamily(const std::string& f) {
+  if (f == "tag36h11") return tag36h11_create();
+  if (f == "tag25h9") return tag25h9_create();
+  if (f == "tag16h5") return tag16h5_create();
+  if (f == "tagStandard41h12") return tagStandard41h12_create();
+  if (f == "tagCircle21h7") return tagCircle21h7_create();
   throw InputError(
       "tag family '" + f +
       "' is unknown, expected tag36h11, tag25h9, tag16h5, tagStandard41h12 or tagCircle21h7");
+}
+
+// Detaches a detector's families without freeing their tables (apriltag_detector_destroy would).
+void ReleaseFamilies(apriltag_detector_t* detector) { zarray_clear(detector->tag_families); }
+
+// One family per (name, bits corrected) per process, with its decode table. libapriltag builds
+// the table when a family is first added to a detector (134 ms for tag36h11 correcting 2 bits;
+// every tracker with tags has two detectors) and frees it when that detector is destroyed; a
+// family that already has one is added without building it again. So the table is built here
+// once, on a detector that lets go of the family before it is destroyed, and every TagDetector
+// adds the shared family and lets go of it the same way. Detection only reads the table: the
+// detectors of parallel sets share it safely. Kept for the process's life.
+apriltag_family_t* SharedFamily(const std::string& name, int bits_corrected) {
+  static std::mutex mutex;
+  static std::map<std::pair<std::string, int>, apriltag_family_t*> families;
+  const std::lock_guard<std::mutex> lock(mutex);
+  apriltag_family_t*& family = families[{name, bits_corrected}];
+  if (family == nullptr) {
+    family = CreateFamily(name);
+    apriltag_detector_t* builder = apriltag_detector_create();
+    apriltag_detector_add_family_bits(builder, family, bits_corrected);
+    ReleaseFamilies(builder);
+    apriltag_detector_destroy(builder);
+  }
+  return family;
 }
 
 }  // namespace
@@ -99,8 +123,6 @@ Image8 ReadGreyImage(const std::string& path) {
 }
 
 struct TagDetector::Impl {
-  apriltag_family_t* family = nullptr;
-  void (*destroy)(apriltag_family_t*) = nullptr;
   apriltag_detector_t* detector = nullptr;
   std::vector<std::uint8_t> grey;
 };
@@ -109,11 +131,9 @@ TagDetector::TagDetector(const TagDetectorParams& params)
     : impl_(std::make_unique<Impl>()), params_(params) {
   params_.Validate();
   Impl& d = *impl_;
-  const Family fam = CreateFamily(params_.family);
-  d.family = fam.family;
-  d.destroy = fam.destroy;
+  apriltag_family_t* family = SharedFamily(params_.family, params_.max_hamming);
   d.detector = apriltag_detector_create();
-  apriltag_detector_add_family_bits(d.detector, d.family, params_.max_hamming);
+  apriltag_detector_add_family_bits(d.detector, family, params_.max_hamming);
   d.detector->quad_decimate = static_cast<float>(params_.decimate);
   d.detector->quad_sigma = static_cast<float>(params_.sigma);
   d.detector->refine_edges = params_.refine_edges;
@@ -121,8 +141,9 @@ TagDetector::TagDetector(const TagDetectorParams& params)
 }
 
 TagDetector::~TagDetector() {
-  if (impl_->detector) apriltag_detector_destroy(impl_->detector);
-  if (impl_->family) impl_->destroy(impl_->family);
+  if (!impl_->detector) return;
+  ReleaseFamilies(impl_->detector);  // the shared family keeps its table
+  apriltag_detector_destroy(impl_->detector);
 }
 
 std::vector<TagDetection> TagDetector::Detect(const Image8& image) {
