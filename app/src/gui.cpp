@@ -80,6 +80,12 @@ struct GuiState {
   SessionOverview::Data overview;
   long overview_version = -1;  // -1: copy whatever the overview has
   int overview_link = -1;      // the link whose series `overview` holds (the inspected one)
+  // The history of the inspector's selected visual measurement (VisualHistory) in every set, for
+  // the overview's version and the id it was made for; images that measured it and that gated it.
+  SessionOverview::Data visual_history;
+  long visual_history_version = -2;
+  int visual_history_id = -1;
+  std::vector<int> visual_history_images, visual_history_gated;
   // The A/B comparison: the session replayed with parameters B (Runner::compare), what B is, and
   // the quantity the Compare tab plots (CompareQuantity).
   SessionOverview::Data compare;
@@ -181,6 +187,7 @@ class Runner {
     overview_.reset();  // stops the old one first
     overview_ = std::make_unique<SessionOverview>(session_, state_.params, player_->sets());
     state_.overview_version = -1;
+    state_.visual_history_version = -2;
   }
   void Restart() {
     player_ = std::make_unique<SessionPlayer>(session_, state_.params, state_.sets);
@@ -320,6 +327,13 @@ void ReadOverview(Runner& runner, GuiState& state) {
       runner.overview().Read(state.overview_version, state.overview, state.overview_link);
   if (runner.compare())
     state.compare_version = runner.compare()->Read(state.compare_version, state.compare, -1);
+  if (state.inspect_visual >= 0 && (state.visual_history_version != state.overview_version ||
+                                    state.visual_history_id != state.inspect_visual)) {
+    VisualHistory(state.overview, state.inspect_visual, state.visual_history,
+                  state.visual_history_images, state.visual_history_gated);
+    state.visual_history_version = state.overview_version;
+    state.visual_history_id = state.inspect_visual;
+  }
 }
 
 // The set the inspector lists: the one chosen, else the last (the richest: it is drawn last and
@@ -1212,6 +1226,47 @@ std::string VisualName(const ModalitySet& set, int id) {
   return name;
 }
 
+// Whether a set's visual measurement ids name the same thing from image to image: tag corners
+// (tag id × 4 + corner) do; a feature match's id is its index among one image's matches.
+bool StableVisualIds(const ModalitySet& set) { return set.tags && !set.features; }
+
+// The selected visual measurement's history over the shared window, in every set whose ids are
+// stable: its residual and Mahalanobis distance (against the gate) in the last image fused at
+// each time, gaps where that image did not measure it.
+void DrawVisualHistory(Runner& runner, GuiState& state, std::size_t set, float avail) {
+  const SessionPlayer& p = runner.player();
+  if (!StableVisualIds(p.sets()[set])) {
+    ImGui::TextWrapped(
+        "%s matches its features afresh in each image: a match has no history (tag corners do)",
+        p.sets()[set].name.c_str());
+    return;
+  }
+  const std::string name = VisualName(p.sets()[set], state.inspect_visual);
+  std::string counts;
+  for (std::size_t i = 0; i < p.sets().size() && i < state.visual_history_images.size(); ++i)
+    if (StableVisualIds(p.sets()[i]))
+      counts += (counts.empty() ? "" : ", ") + p.sets()[i].name + " " +
+                std::to_string(state.visual_history_images[i]) + " images (" +
+                std::to_string(state.visual_history_gated[i]) + " gated)";
+  ImGui::TextWrapped(
+      "%s over the shared window, in the last image fused at each time (gaps: not measured): %s",
+      name.c_str(), counts.c_str());
+  // The sets whose ids change meaning from image to image stay out of the plots.
+  for (std::size_t i = 0; i < p.sets().size() && i < state.visual_history.sets.size(); ++i)
+    if (!StableVisualIds(p.sets()[i])) {
+      state.visual_history.sets[i].visual_residual.clear();
+      state.visual_history.sets[i].visual_history_mahalanobis.clear();
+    }
+  using Set = SessionOverview::Set;
+  std::vector<PlotSpec> plots = {
+      {"##vresidual", "residual before the update", "px", &Set::visual_residual},
+      {"##vmahalanobis", "Mahalanobis", "", &Set::visual_history_mahalanobis}};
+  for (PlotSpec& plot : plots) plot.data = &state.visual_history;
+  if (state.params.filter.visual_gate_chi2 > 0)
+    plots[1].line = state.params.filter.visual_gate_chi2;
+  DrawPlots(runner, state, plots, 2, avail, 104);
+}
+
 // Every measurement of one set's last step — each link's contact and each visual measurement of
 // the image fused at it — in tables; a click on a row selects it (ringed in every view). For a
 // selected link, its history over the shared window, every set: status lanes, signed distance,
@@ -1325,11 +1380,15 @@ void DrawInspector(Runner& runner, GuiState& state, const Textures& tex, float a
         VisualName(p.sets()[set], v.id).c_str(), runner.visual_t(set), v.measured.x(),
         v.measured.y(), v.predicted.x(), v.predicted.y(), r.x(), r.y(), v.mahalanobis,
         state.params.filter.visual_gate_chi2, v.gated ? "gated" : "fused");
+    // The patches, and the history beside them.
+    const float x0 = ImGui::GetCursorPosX();
+    bool beside = false;
     if (tex.has_patch_camera) {
       ImGui::BeginGroup();
       ImGui::TextUnformatted("camera (measured)");
       tex.patch_camera.Show(150);
       ImGui::EndGroup();
+      beside = true;
     }
     if (tex.has_patch_virtual) {
       ImGui::SameLine();
@@ -1338,6 +1397,13 @@ void DrawInspector(Runner& runner, GuiState& state, const Textures& tex, float a
       tex.patch_virtual.Show(150);
       ImGui::EndGroup();
     }
+    if (beside) ImGui::SameLine();
+    const float used = ImGui::GetCursorPosX() - x0;
+    ImGui::BeginGroup();
+    ImGui::PushTextWrapPos(ImGui::GetCursorPosX() + avail - used);
+    DrawVisualHistory(runner, state, set, avail - used);
+    ImGui::PopTextWrapPos();
+    ImGui::EndGroup();
     return;
   }
   if (state.inspect_link < 0 || static_cast<std::size_t>(state.inspect_link) >= links.size()) {
@@ -1951,7 +2017,19 @@ class GuiScript {
         if (std::isfinite(pixel_3d.x()))
           std::snprintf(drawn + std::strlen(drawn), sizeof drawn - std::strlen(drawn),
                         " (3-D view at %.2f %.2f px)", pixel_3d.x(), pixel_3d.y());
-        Report(where, selected == c.text, "selected " + selected + drawn + ", expected " + c.text);
+        // A tag corner's history (DrawVisualHistory): the images that measured it, per set.
+        std::string history;
+        const SessionPlayer& p = runner.player();
+        if (state.inspect_visual >= 0 && state.visual_history_id == state.inspect_visual)
+          for (std::size_t i = 0; i < p.sets().size() && i < state.visual_history_images.size();
+               ++i)
+            if (StableVisualIds(p.sets()[i]))
+              history += (history.empty() ? " (history: " : ", ") + p.sets()[i].name + " " +
+                         std::to_string(state.visual_history_images[i]) + " images, " +
+                         std::to_string(state.visual_history_gated[i]) + " gated";
+        if (!history.empty()) history += ")";
+        Report(where, selected == c.text,
+               "selected " + selected + drawn + history + ", expected " + c.text);
         continue;
       }
       if (c.verb == "wait-events" || c.verb == "expect-events" || c.verb == "expect-contact") {

@@ -143,6 +143,7 @@ long SessionOverview::Read(long version, Data& data, int link) const {
     const Set& from = data_.sets[i];
     Set& to = data.sets[i];
     AppendFrom(from.events, to.events, to.events.size());
+    AppendFrom(from.visual, to.visual, to.visual.size());
     ForEachSeries(
         from, to,
         [have](const auto& source, auto& target) {
@@ -186,6 +187,8 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         Set& to = data_.sets[i];
         to.events.insert(to.events.end(), from.events.begin(), from.events.end());
         from.events.clear();
+        to.visual.insert(to.visual.end(), from.visual.begin(), from.visual.end());
+        from.visual.clear();
         ForEachSeries(from, to, [](auto& source, auto& target) {
           target.insert(target.end(), source.begin(), source.end());
           source.clear();
@@ -240,6 +243,10 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         s.contact_mahalanobis.push_back(
             static_cast<float>(constraints > 0 ? mahalanobis / constraints : kNaN));
         s.contact_force.push_back(static_cast<float>(force));
+        for (const FilterTrace::Visual& v : filter.trace().visual)
+          s.visual.push_back({static_cast<float>(session.t(k)), v.id,
+                              static_cast<float>((v.measured - v.predicted).norm()),
+                              static_cast<float>(v.mahalanobis), v.gated});
         LinkContacts(filter.trace(), player.models().hand.links.size(), link_contacts);
         const auto per_link = [&](std::vector<std::vector<float>>& series, auto value) {
           series.resize(link_contacts.size());
@@ -286,6 +293,42 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
     data_.progress.done = true;
     data_.progress.error = e.what();
     ++version_;
+  }
+}
+
+void VisualHistory(const SessionOverview::Data& data, int id, SessionOverview::Data& out,
+                   std::vector<int>& images, std::vector<int>& gated) {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  out.t = data.t;
+  out.progress = data.progress;
+  out.sets.resize(data.sets.size());
+  images.assign(data.sets.size(), 0);
+  gated.assign(data.sets.size(), 0);
+  for (std::size_t i = 0; i < data.sets.size(); ++i) {
+    const std::vector<VisualRecord>& records = data.sets[i].visual;
+    std::vector<float>& residual = out.sets[i].visual_residual;
+    std::vector<float>& mahalanobis = out.sets[i].visual_history_mahalanobis;
+    residual.assign(data.t.size(), kNaN);
+    mahalanobis.assign(data.t.size(), kNaN);
+    // Walk the samples and the records together: an image's records share its sample's time.
+    std::size_t r = 0;
+    float value = kNaN, distance = kNaN;
+    for (std::size_t k = 0; k < data.t.size(); ++k) {
+      const float t = static_cast<float>(data.t[k]);
+      if (r < records.size() && records[r].t <= t) {
+        value = distance = kNaN;  // a new image: the id is measured in it or not at all
+        const float image_t = records[r].t;
+        bool measured = false;
+        for (; r < records.size() && records[r].t == image_t; ++r)
+          if (records[r].id == id) {
+            value = records[r].residual, distance = records[r].mahalanobis, measured = true;
+            gated[i] += records[r].gated;
+          }
+        images[i] += measured;
+      }
+      residual[k] = value;
+      mahalanobis[k] = distance;
+    }
   }
 }
 

@@ -999,7 +999,9 @@ TEST(Gui, TheInspectorSelectsWhatWasClickedAndShowsItsHistory) {
                 "seek 2.5\nwait 3\nscreenshot %s\n"
                 "select jtf middle_distal\nwait 3\nexpect selected jtf/middle_distal\n"
                 "click 830 545   # the visual table's first row\nwait 3\n"
-                "expect selected jtf/visual:0\n",
+                "expect selected jtf/visual:0\n"
+                "select jta middle_distal\nwait 3\nclick 830 545\nwait 3\n"
+                "expect selected jta/visual:0\n",
                 made->t, made->subject.c_str(), made->subject.c_str(), (dir / "plain.png").c_str());
   const std::string first = run(script, "env -u DISPLAY");
   const auto feature = drawn(first, "jtf/visual:0");
@@ -1009,6 +1011,15 @@ TEST(Gui, TheInspectorSelectsWhatWasClickedAndShowsItsHistory) {
               std::isfinite(contact_3d[0]))
       << first;
   // The 3-D view: below the virtual view, right of the 640x480 camera panel.
+  // A tag corner keeps its id from image to image: its history counts the images that saw it.
+  int images = 0;
+  const std::size_t history = first.find("selected jta/visual:0 (drawn at");
+  ASSERT_NE(history, std::string::npos) << first;
+  ASSERT_EQ(std::sscanf(first.c_str() + first.find("(history: jta ", history), "(history: jta %d",
+                        &images),
+            1)
+      << first;
+  EXPECT_GE(images, 20) << first;
   EXPECT_GT(contact_3d[0], 640.0);
   EXPECT_GT(contact_3d[1], 240.0);
   std::snprintf(script, sizeof script,

@@ -230,6 +230,71 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
   }
 }
 
+// The inspector's history of a tag corner: the overview's record of every visual measurement is
+// what a player of its own, stepping every sample, finds in its filter's trace (two runs, one
+// answer); a corner's history holds, at each sample, its residual and Mahalanobis distance in the
+// last image fused, NaN before the first image and where that image did not see it.
+TEST(SessionOverview, RecordsEveryVisualMeasurementForItsHistory) {
+  test::TempDir dir;
+  ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 5"));
+  Session session = Session::Load(dir / "session");
+  const std::vector<app::ModalitySet> sets = app::ParseModalities("jt,jta");
+  app::SessionOverview overview(session, TrackerParams(), sets);
+  SessionPlayer player(session, TrackerParams(), sets);
+  std::vector<app::VisualRecord> expected;
+  for (int k = 0; k < player.num_samples(); ++k) {
+    player.Step(k);
+    for (const FilterTrace::Visual& v : player.tracker(1).filter().trace().visual)
+      expected.push_back({static_cast<float>(session.t(k)), v.id,
+                          static_cast<float>((v.measured - v.predicted).norm()),
+                          static_cast<float>(v.mahalanobis), v.gated});
+  }
+  overview.Wait();
+  app::SessionOverview::Data data;
+  overview.Read(-1, data);
+  EXPECT_TRUE(data.sets[0].visual.empty());  // jt sees no image
+  const std::vector<app::VisualRecord>& found = data.sets[1].visual;
+  ASSERT_EQ(found.size(), expected.size());
+  ASSERT_GT(found.size(), 40u);
+  for (std::size_t r = 0; r < found.size(); ++r) {
+    EXPECT_EQ(found[r].t, expected[r].t) << r;
+    EXPECT_EQ(found[r].id, expected[r].id) << r;
+    EXPECT_EQ(found[r].residual, expected[r].residual) << r;
+    EXPECT_EQ(found[r].mahalanobis, expected[r].mahalanobis) << r;
+    EXPECT_EQ(found[r].gated, expected[r].gated) << r;
+  }
+  // The corner seen first, its history sample by sample.
+  const int id = found.front().id;
+  app::SessionOverview::Data history;
+  std::vector<int> images, gated;
+  app::VisualHistory(data, id, history, images, gated);
+  ASSERT_EQ(history.t, data.t);
+  const std::vector<float>& residual = history.sets[1].visual_residual;
+  ASSERT_EQ(residual.size(), data.t.size());
+  std::map<float, const app::VisualRecord*> of_image;  // the corner's record per image time
+  std::vector<float> image_times;
+  for (const app::VisualRecord& r : found) {
+    if (image_times.empty() || image_times.back() != r.t) image_times.push_back(r.t);
+    if (r.id == id) of_image[r.t] = &r;
+  }
+  EXPECT_EQ(images[1], static_cast<int>(of_image.size()));
+  EXPECT_EQ(images[0], 0);
+  int measured = 0;
+  for (std::size_t k = 0; k < data.t.size(); ++k) {
+    const float t = static_cast<float>(data.t[k]);
+    const auto last = std::upper_bound(image_times.begin(), image_times.end(), t);
+    const auto it = last == image_times.begin() ? of_image.end() : of_image.find(*std::prev(last));
+    if (it == of_image.end()) {
+      EXPECT_TRUE(std::isnan(residual[k])) << k;
+    } else {
+      EXPECT_EQ(residual[k], it->second->residual) << k;
+      EXPECT_EQ(history.sets[1].visual_history_mahalanobis[k], it->second->mahalanobis) << k;
+      ++measured;
+    }
+  }
+  EXPECT_GT(measured, static_cast<int>(data.t.size()) / 2);
+}
+
 // The overview keeps checkpoints on its way; a player restored from one (the GUI seeking forward
 // to where it has not been) goes on bit-identically to one that stepped every sample.
 TEST(SessionOverview, ItsCheckpointsResumeBitIdentically) {

@@ -33,6 +33,18 @@ struct LinkContact {
 // kNone. Allocates nothing once `out` has its size.
 void LinkContacts(const FilterTrace& trace, std::size_t num_links, std::vector<LinkContact>& out);
 
+// One visual measurement of an image a set fused (FilterTrace::Visual): when, which (a tag corner
+// keeps its id, tag id × 4 + corner, from image to image; a feature match's id is only its index
+// among that image's matches), its residual at the estimate before the update, its Mahalanobis
+// distance and whether the gate refused it.
+struct VisualRecord {
+  float t = 0.0f;  // [s] the sample that fused the image
+  int id = -1;
+  float residual = 0.0f;  // [px] |measured − predicted|
+  float mahalanobis = 0.0f;
+  bool gated = false;
+};
+
 class SessionOverview {
  public:
   // The session must outlive the overview; the work starts at once.
@@ -76,6 +88,12 @@ class SessionOverview {
     // one link's (the rest stay empty): every link's would double what the overview holds.
     std::vector<std::vector<float>> link_distance, link_force, link_mahalanobis;
     std::vector<std::vector<std::uint8_t>> link_status;
+    // Every visual measurement of every image the set fused, in time order.
+    std::vector<VisualRecord> visual;
+    // One measurement's history as per-sample series (filled by VisualHistory only): its residual
+    // [px] and Mahalanobis distance in the last image fused at or before each sample, NaN where
+    // that image did not measure it.
+    std::vector<float> visual_residual, visual_history_mahalanobis;
   };
   struct Data {
     std::vector<double> t;  // [s] the samples replayed
@@ -112,5 +130,11 @@ class SessionOverview {
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
+
+// The history of visual measurement `id` in every set of `data` (VisualRecord, Set::
+// visual_residual): `out` gets data's times and progress and, per set, the two series; `gated`
+// and `images` count, per set, the images that gated it and those that measured it.
+void VisualHistory(const SessionOverview::Data& data, int id, SessionOverview::Data& out,
+                   std::vector<int>& images, std::vector<int>& gated);
 
 }  // namespace inhand::app
