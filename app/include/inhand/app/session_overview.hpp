@@ -115,7 +115,7 @@ class SessionOverview {
   // resumes at, `last_frame` the last camera frame processed before it (-1: none).
   bool CheckpointIn(int after, int at_most, int& resume, SessionPlayer::Checkpoint& checkpoint,
                     int& last_frame) const;
-  static int CheckpointEvery(int samples) { return std::max(250, samples / 50); }
+  static int CheckpointEvery(int samples) { return std::max(125, samples / 50); }
 
  private:
   void Run(const Session& session, const TrackerParams& params, std::vector<ModalitySet> sets);
