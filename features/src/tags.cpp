@@ -71,9 +71,11 @@ void ReleaseFamilies(apriltag_detector_t* detector) { zarray_clear(detector->tag
 // detectors of parallel sets share it safely. Kept for the process's life.
 apriltag_family_t* SharedFamily(const std::string& name, int bits_corrected) {
   static std::mutex mutex;
-  static std::map<std::pair<std::string, int>, apriltag_family_t*> families;
+  // Never destroyed: a map destroyed at exit would leave the families unreachable before the
+  // leak checker looks (the sanitizer pass), and nothing frees them anyway.
+  static auto* const families = new std::map<std::pair<std::string, int>, apriltag_family_t*>();
   const std::lock_guard<std::mutex> lock(mutex);
-  apriltag_family_t*& family = families[{name, bits_corrected}];
+  apriltag_family_t*& family = (*families)[{name, bits_corrected}];
   if (family == nullptr) {
     family = CreateFamily(name);
     apriltag_detector_t* builder = apriltag_detector_create();
