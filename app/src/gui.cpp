@@ -323,6 +323,10 @@ class Runner {
 };
 
 // Brings the GUI's copy of the overview up to date; of the per-link series, the inspected link's.
+// Whether a set's visual measurement ids name the same thing from image to image: tag corners
+// (tag id × 4 + corner) do; a feature match's id is its index among one image's matches.
+bool StableVisualIds(const ModalitySet& set) { return set.tags && !set.features; }
+
 void ReadOverview(Runner& runner, GuiState& state) {
   if (state.inspect_link != state.overview_link)
     state.overview_version = -1, state.overview_link = state.inspect_link;
@@ -334,9 +338,30 @@ void ReadOverview(Runner& runner, GuiState& state) {
                                     state.visual_history_id != state.inspect_visual)) {
     VisualHistory(state.overview, state.inspect_visual, state.visual_history,
                   state.visual_history_images, state.visual_history_gated);
+    // The sets whose ids change meaning from image to image have no history to plot.
+    const std::vector<ModalitySet>& sets = runner.player().sets();
+    for (std::size_t i = 0; i < sets.size() && i < state.visual_history.sets.size(); ++i)
+      if (!StableVisualIds(sets[i])) {
+        state.visual_history.sets[i].visual_residual.clear();
+        state.visual_history.sets[i].visual_history_mahalanobis.clear();
+      }
     state.visual_history_version = state.overview_version;
     state.visual_history_id = state.inspect_visual;
   }
+}
+
+// Per set with tag corners, the images that measured the selected one and gated it, from the
+// history ReadOverview made: "jta 41 images (0 gated), ..." ("" when it has none).
+std::string VisualHistoryCounts(const Runner& runner, const GuiState& state) {
+  const std::vector<ModalitySet>& sets = runner.player().sets();
+  std::string counts;
+  if (state.inspect_visual < 0 || state.visual_history_id != state.inspect_visual) return counts;
+  for (std::size_t i = 0; i < sets.size() && i < state.visual_history_images.size(); ++i)
+    if (StableVisualIds(sets[i]))
+      counts += (counts.empty() ? "" : ", ") + sets[i].name + " " +
+                std::to_string(state.visual_history_images[i]) + " images (" +
+                std::to_string(state.visual_history_gated[i]) + " gated)";
+  return counts;
 }
 
 // The set the inspector lists: the one chosen, else the last (the richest: it is drawn last and
@@ -1229,10 +1254,6 @@ std::string VisualName(const ModalitySet& set, int id) {
   return name;
 }
 
-// Whether a set's visual measurement ids name the same thing from image to image: tag corners
-// (tag id × 4 + corner) do; a feature match's id is its index among one image's matches.
-bool StableVisualIds(const ModalitySet& set) { return set.tags && !set.features; }
-
 // The selected visual measurement's history over the shared window, in every set whose ids are
 // stable: its residual and Mahalanobis distance (against the gate) in the last image fused at
 // each time, gaps where that image did not measure it.
@@ -1245,21 +1266,9 @@ void DrawVisualHistory(Runner& runner, GuiState& state, std::size_t set, float a
     return;
   }
   const std::string name = VisualName(p.sets()[set], state.inspect_visual);
-  std::string counts;
-  for (std::size_t i = 0; i < p.sets().size() && i < state.visual_history_images.size(); ++i)
-    if (StableVisualIds(p.sets()[i]))
-      counts += (counts.empty() ? "" : ", ") + p.sets()[i].name + " " +
-                std::to_string(state.visual_history_images[i]) + " images (" +
-                std::to_string(state.visual_history_gated[i]) + " gated)";
   ImGui::TextWrapped(
       "%s over the shared window, in the last image fused at each time (gaps: not measured): %s",
-      name.c_str(), counts.c_str());
-  // The sets whose ids change meaning from image to image stay out of the plots.
-  for (std::size_t i = 0; i < p.sets().size() && i < state.visual_history.sets.size(); ++i)
-    if (!StableVisualIds(p.sets()[i])) {
-      state.visual_history.sets[i].visual_residual.clear();
-      state.visual_history.sets[i].visual_history_mahalanobis.clear();
-    }
+      name.c_str(), VisualHistoryCounts(runner, state).c_str());
   using Set = SessionOverview::Set;
   std::vector<PlotSpec> plots = {
       {"##vresidual", "residual before the update", "px", &Set::visual_residual},
@@ -2021,16 +2030,8 @@ class GuiScript {
           std::snprintf(drawn + std::strlen(drawn), sizeof drawn - std::strlen(drawn),
                         " (3-D view at %.2f %.2f px)", pixel_3d.x(), pixel_3d.y());
         // A tag corner's history (DrawVisualHistory): the images that measured it, per set.
-        std::string history;
-        const SessionPlayer& p = runner.player();
-        if (state.inspect_visual >= 0 && state.visual_history_id == state.inspect_visual)
-          for (std::size_t i = 0; i < p.sets().size() && i < state.visual_history_images.size();
-               ++i)
-            if (StableVisualIds(p.sets()[i]))
-              history += (history.empty() ? " (history: " : ", ") + p.sets()[i].name + " " +
-                         std::to_string(state.visual_history_images[i]) + " images, " +
-                         std::to_string(state.visual_history_gated[i]) + " gated";
-        if (!history.empty()) history += ")";
+        std::string history = VisualHistoryCounts(runner, state);
+        if (!history.empty()) history = " (history: " + history + ")";
         Report(where, selected == c.text,
                "selected " + selected + drawn + history + ", expected " + c.text);
         continue;
