@@ -209,6 +209,10 @@ class Runner {
   // anywhere steps at most CheckpointEvery() samples once the overview has passed there.
   void StepTo(int k) {
     k = std::clamp(k, 0, session_.num_samples() - 1);
+    // Those of our checkpoints the overview has got to since: its copy serves.
+    for (auto it = checkpoints_.begin(); overview_ && it != checkpoints_.end();)
+      it = it->first > 0 && overview_->HasCheckpoint(it->first) ? checkpoints_.erase(it)
+                                                                : std::next(it);
     const bool back = k < next_ - 1;
     // The latest checkpoint resuming at or before k + 1 (after next_ unless going back).
     const int after = back ? -1 : next_;
@@ -224,8 +228,6 @@ class Runner {
       next_ = overview_resume;
       last_frame_ = overview_frame;
       state_.pictures_dirty = true;
-      if (!checkpoints_.count(next_))
-        checkpoints_.emplace(next_, RunnerCheckpoint{std::move(from_overview), last_frame_});
     } else if (resume >= 0) {
       const RunnerCheckpoint& c = checkpoints_.at(resume);
       player_->Restore(c.player);
@@ -244,7 +246,10 @@ class Runner {
       if (!session_.info().camera)
         state_.pictures_dirty = true;  // the 3-D view follows every sample
       ++next_;
-      if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_))
+      // Only where the overview has none (it has not got there yet): a checkpoint holds a few
+      // MB of images, and the overview's serve going back as well as forward.
+      if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_) &&
+          !(overview_ && overview_->HasCheckpoint(next_)))
         checkpoints_.emplace(next_, RunnerCheckpoint{player_->Save(), last_frame_});
     }
   }

@@ -137,6 +137,10 @@ long SessionOverview::Read(long version, Data& data, int link) const {
   if (version == version_) return version;
   if (version < 0) data.t.clear(), data.sets.clear();
   const std::size_t have = data.t.size();
+  // The whole session's length at once: a copy grown by doubling would hold up to twice its
+  // samples (a 10-minute session's series are hundreds of MB).
+  const std::size_t n = samples_;
+  data.t.reserve(n);
   AppendFrom(data_.t, data.t, have);
   data.sets.resize(data_.sets.size());
   for (std::size_t i = 0; i < data_.sets.size(); ++i) {
@@ -146,7 +150,8 @@ long SessionOverview::Read(long version, Data& data, int link) const {
     AppendFrom(from.visual, to.visual, to.visual.size());
     ForEachSeries(
         from, to,
-        [have](const auto& source, auto& target) {
+        [have, n](const auto& source, auto& target) {
+          target.reserve(n);
           if (target.size() < have)  // a link not read before
             target.assign(source.begin(), source.end());
           else
@@ -155,6 +160,11 @@ long SessionOverview::Read(long version, Data& data, int link) const {
         link);
   }
   return version_;
+}
+
+bool SessionOverview::HasCheckpoint(int resume) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return checkpoints_.count(resume) > 0;
 }
 
 bool SessionOverview::CheckpointIn(int after, int at_most, int& resume,
@@ -176,6 +186,11 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
     SessionPlayer player(session, params, std::move(sets));
     const int n = player.num_samples();
     const std::size_t num_sets = player.sets().size();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      samples_ = static_cast<std::size_t>(n);
+      data_.t.reserve(samples_);
+    }
     Data found;  // since the last publication
     found.sets.resize(num_sets);
     const auto publish = [&](int k, bool done) {
@@ -189,7 +204,8 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
         from.events.clear();
         to.visual.insert(to.visual.end(), from.visual.begin(), from.visual.end());
         from.visual.clear();
-        ForEachSeries(from, to, [](auto& source, auto& target) {
+        ForEachSeries(from, to, [n](auto& source, auto& target) {
+          target.reserve(static_cast<std::size_t>(n));  // every sample's value, without slack
           target.insert(target.end(), source.begin(), source.end());
           source.clear();
         });

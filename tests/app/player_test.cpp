@@ -94,6 +94,17 @@ TEST(SessionOverview, FindsTheEventsAndSeriesReplayWrites) {
   ASSERT_EQ(data.t.size(), static_cast<std::size_t>(session.num_samples()));
   EXPECT_EQ(overview.Read(version, data), version);
   EXPECT_EQ(data.t.size(), static_cast<std::size_t>(session.num_samples()));  // nothing added
+  // The copy holds the session's samples without the slack of growing by doubling (a 10-minute
+  // session's series are hundreds of MB).
+  EXPECT_EQ(data.t.capacity(), data.t.size());
+  for (const app::SessionOverview::Set& s : data.sets) {
+    EXPECT_EQ(s.position_error.capacity(), data.t.size());
+    EXPECT_EQ(s.sigma_position_axis[2].capacity(), data.t.size());
+    ASSERT_FALSE(s.bias.empty());
+    EXPECT_EQ(s.bias.back().capacity(), data.t.size());
+    ASSERT_FALSE(s.link_status.empty());
+    EXPECT_EQ(s.link_status.back().capacity(), data.t.size());
+  }
   // estimates.csv's position error and largest position sigma, per set, sample for sample.
   {
     std::ifstream in(dir / "replay/estimates.csv");

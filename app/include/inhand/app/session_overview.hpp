@@ -116,11 +116,14 @@ class SessionOverview {
   bool CheckpointIn(int after, int at_most, int& resume, SessionPlayer::Checkpoint& checkpoint,
                     int& last_frame) const;
   static int CheckpointEvery(int samples) { return std::max(125, samples / 50); }
+  // Whether the overview has a checkpoint resuming at sample `resume`.
+  bool HasCheckpoint(int resume) const;
 
  private:
   void Run(const Session& session, const TrackerParams& params, std::vector<ModalitySet> sets);
   mutable std::mutex mutex_;
   Data data_;
+  std::size_t samples_ = 0;  // the session's samples, once the replay knows them
   struct Saved {
     SessionPlayer::Checkpoint checkpoint;
     int last_frame = -1;
