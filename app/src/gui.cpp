@@ -65,6 +65,11 @@ struct Action {
 struct GuiState {
   bool playing = false;
   float speed = 1.0f;
+  // Playback in a window follows the wall clock (a slow frame steps more samples); offscreen it
+  // steps 1/30 s of the recording per frame, so that a script's run is the same every time.
+  bool play_wall_clock = false;
+  std::chrono::steady_clock::time_point play_last;  // the last frame that stepped playback
+  double play_carry = 0.0;                          // [samples] not stepped yet
   int seek_sample = 0;
   float typed_time = 0.0f;
   bool editing_time = false;  // while typing, the field does not follow the replay
@@ -447,6 +452,7 @@ void ApplyActions(Runner& runner, GuiState& state) {
     switch (a.kind) {
       case ActionKind::kTogglePlay:
         state.playing = !state.playing;
+        state.play_last = std::chrono::steady_clock::now(), state.play_carry = 0.0;
         break;
       case ActionKind::kStepSample:
         runner.StepTo(runner.sample() + 1), state.pictures_dirty = true;
@@ -503,11 +509,21 @@ void ApplyActions(Runner& runner, GuiState& state) {
     }
   }
   if (state.playing) {
-    // Real time at `speed`, assuming 30 interface frames per second.
+    // Real time at `speed`: the recording's time that passed on the wall clock since the last
+    // frame (at most 0.25 s of it: a frame that long shows that playback cannot keep up), or 1/30 s
+    // per frame offscreen.
     const Session& s = runner.session();
     const double rate =
         s.num_samples() > 1 ? (s.num_samples() - 1) / (s.t(s.num_samples() - 1) - s.t(0)) : 100.0;
-    const int step = std::max(1, static_cast<int>(std::lround(rate * state.speed / 30.0)));
+    const auto now = std::chrono::steady_clock::now();
+    const double dt =
+        state.play_wall_clock
+            ? std::min(0.25, std::chrono::duration<double>(now - state.play_last).count())
+            : 1.0 / 30.0;
+    state.play_last = now;
+    state.play_carry += rate * state.speed * dt;
+    const int step = std::max(1, static_cast<int>(state.play_carry));
+    state.play_carry = std::max(0.0, state.play_carry - step);
     runner.StepTo(runner.sample() + step);  // marks the pictures dirty when a camera frame arrives
     if (runner.sample() >= s.num_samples() - 1) state.playing = false;
   }
@@ -1904,8 +1920,8 @@ class GuiScript {
   }
 
   bool done() const {
-    return next_ >= commands_.size() && !pressing_ && !releasing_ && wheel_ == 0.0f && key_ < 0 &&
-           drag_.empty();
+    return next_ >= commands_.size() && wait_ <= 0 && !pressing_ && !releasing_ && wheel_ == 0.0f &&
+           key_ < 0 && drag_.empty();
   }
   int failures() const { return failures_; }
 
@@ -2436,6 +2452,8 @@ int RunGui(const GuiCommand& cmd) {
     SaveGuiLayout(state);
     return code;
   }
+  state.play_wall_clock = true;
+  state.play_last = std::chrono::steady_clock::now();
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);

@@ -809,6 +809,26 @@ TEST(Gui, HeadlessScreenshotWithoutAnyDisplay) {
   EXPECT_NE(none.output.find("no display"), std::string::npos) << none.output;
 }
 
+// A script's last `wait N` runs its N frames before the run ends (it used to end at once, so a
+// script could not measure frames after its last action).
+TEST(Gui, AScriptsLastWaitRunsItsFrames) {
+  INHAND_REQUIRE_GUI();
+  test::TempDir dir;
+  std::ofstream(dir / "wait.script") << "wait 2\nkey space\nwait 25\n";
+  const test::CommandResult r = test::RunInhand(
+      "gui " + ShortSession() + " --script " + (dir / "wait.script"), "env -u DISPLAY");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::size_t at = r.output.find("(no display): ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  EXPECT_GE(std::stoi(r.output.substr(at + 14)), 27) << r.output;
+  // Offscreen, playback steps 1/30 s of the recording per frame: 25 frames or so play ~0.8 s
+  // from the start at 1 s.
+  const std::size_t t = r.output.find(", t ");
+  ASSERT_NE(t, std::string::npos) << r.output;
+  EXPECT_NEAR(std::stod(r.output.substr(t + 4)), 1.0 + 25 / 30.0, 0.1) << r.output;
+  EXPECT_NE(r.output.find("playback"), std::string::npos) << r.output;
+}
+
 TEST(Gui, RealWindowUnderXvfb) {
   INHAND_REQUIRE_GUI();
   if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0)
