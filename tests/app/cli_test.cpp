@@ -829,6 +829,38 @@ TEST(Gui, AScriptsLastWaitRunsItsFrames) {
   EXPECT_NE(r.output.find("playback"), std::string::npos) << r.output;
 }
 
+// Image regression of the interface itself: the script below, on ShortSession (ketchup, no
+// noise, seed 2) with a fresh configuration folder, draws tests/golden/gui_inspector.png: the
+// camera-first picture with every set's overlays and jtf's index_distal selected, the timeline,
+// and the inspector's table, lanes and plots for that link. Offscreen, and in a real window under
+// Xvfb when there is one (both drew it to the pixel when it was made); compared with `inhand
+// compare` at its default tolerance (12 grey levels, 0.3 % of the pixels). A deliberate change of
+// the interface regenerates the golden from the offscreen screenshot (and looks at it first).
+TEST(Gui, TheInterfaceMatchesItsGoldenScreenshot) {
+  INHAND_REQUIRE_GUI();
+  test::TempDir dir;
+  const std::string golden = test::SourceDir() + "/tests/golden/gui_inspector.png";
+  const bool xvfb = std::system("command -v xvfb-run > /dev/null 2>&1") == 0;
+  for (const std::string mode : {"offscreen", "window"}) {
+    if (mode == "window" && !xvfb) continue;
+    const std::string shot = dir / (mode + ".png"), config = dir / (mode + "-config");
+    std::filesystem::create_directories(config);
+    std::ofstream(dir / (mode + ".script"))
+        << "wait-events\nseek 3.0\nwait 2\nselect jtf index_distal\nwait 3\n"
+           "expect selected jtf/index_distal\nscreenshot "
+        << shot << "\n";
+    const std::string env = mode == "window" ? "env XDG_CONFIG_HOME=" + config +
+                                                   " xvfb-run -a -s '-screen 0 1280x800x24'"
+                                             : "env -u DISPLAY XDG_CONFIG_HOME=" + config;
+    const test::CommandResult r =
+        test::RunInhand("gui " + ShortSession() + " --script " + (dir / (mode + ".script")), env);
+    ASSERT_EQ(r.exit_code, 0) << mode << ": " << r.output;
+    const test::CommandResult c = test::RunInhand("compare " + golden + " " + shot + " --diff " +
+                                                  (dir / (mode + "-diff.png")));
+    EXPECT_EQ(c.exit_code, 0) << mode << ": " << c.output;
+  }
+}
+
 TEST(Gui, RealWindowUnderXvfb) {
   INHAND_REQUIRE_GUI();
   if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0)
