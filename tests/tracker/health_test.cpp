@@ -174,12 +174,16 @@ TEST(HealthMonitor, EachConditionDecidesItsStateAndTheWorstWins) {
   t += 0.4;
   for (int i = 0; i < p.vision_window; ++i, t += 0.1) {
     m.OnImageAdded(t, 100 + static_cast<unsigned long long>(i));
-    m.OnImage({t, 10, i < 1 ? 10 : 2, false, false, 0.0});  // 10 + 8 of 50 used
+    // 10 + 8 of 50 used; the gated images put the object 20 mm away, the good one 1 mm.
+    m.OnImage({t, 10, i < 1 ? 10 : 2, false, false, 0.0, i < 1 ? 0.001 : 0.020});
     m.OnSample(t, FilterTrace(), kNarrow, kNarrow);
   }
   EXPECT_EQ(m.health().state, HealthState::kInconsistent);
   EXPECT_EQ(m.health().cause, HealthCause::kVisionDisagrees);
   EXPECT_NEAR(m.health().value, 1.0 - 18.0 / 50.0, 1e-12);
+  // Its distance, for the claim: the window's images' displacement, averaged.
+  EXPECT_NEAR(m.health().distance, (0.001 + 4 * 0.020) / 5, 1e-12);
+  EXPECT_NEAR(HealthPositionSigma(m.health()), (0.001 + 4 * 0.020) / 5, 1e-12);
   // The worst wins: a penetration beside the gated vision stays inconsistent; the grip loosening
   // (uncertain) does not lower it.
   FilterTrace slipping;
@@ -285,7 +289,8 @@ void ComparePressCheck(const HandModel& hand, const ObjectModel& object, const V
 }
 
 // What an estimate claims (ClaimedPoseCovariance): a set inconsistent or lost because a pressing
-// finger is g in the air, or a link d inside, claims at least that σ on every position axis, so
+// finger is g in the air, a link d inside, or its gate refuses images that put the object v away,
+// claims at least that σ on every position axis, so
 // that an error of that size along any direction has a NEES below 1 however small the filter's own
 // σ; every other state and cause claims the filter's covariance, bit for bit.
 TEST(ClaimedCovariance, WidensThePositionByTheDistanceTheHealthSees) {
@@ -294,8 +299,10 @@ TEST(ClaimedCovariance, WidensThePositionByTheDistanceTheHealthSees) {
   P(0, 1) = P(1, 0) = 5e-7;
   P(3, 4) = P(4, 3) = 2e-5;
   for (const HealthState state : {HealthState::kInconsistent, HealthState::kLost})
-    for (const HealthCause cause : {HealthCause::kPressingInAir, HealthCause::kPenetration}) {
-      const Health h{state, cause, 0.034, 3, 1.0};
+    for (const HealthCause cause :
+         {HealthCause::kPressingInAir, HealthCause::kPenetration, HealthCause::kVisionDisagrees}) {
+      const Health h{state, cause, cause == HealthCause::kVisionDisagrees ? 0.8 : 0.034,
+                     3,     1.0,   0.034};
       EXPECT_DOUBLE_EQ(HealthPositionSigma(h), 0.034);
       const Mat6 C = ClaimedPoseCovariance(P, h);
       Mat6 expected = P;
@@ -315,9 +322,9 @@ TEST(ClaimedCovariance, WidensThePositionByTheDistanceTheHealthSees) {
   const Health quiet[] = {
       {HealthState::kOk, HealthCause::kNone, 0.0, -1, 0.0},
       {HealthState::kUncertain, HealthCause::kWideSigma, 0.02, 0, 0.0},
-      {HealthState::kUncertain, HealthCause::kPressingInAir, 0.02, 3, 0.0},  // not sustained yet
+      {HealthState::kUncertain, HealthCause::kPressingInAir, 0.02, 3, 0.0, 0.02},  // not sustained
       {HealthState::kInconsistent, HealthCause::kTagsElsewhere, 0.0, -1, 0.0},
-      {HealthState::kInconsistent, HealthCause::kVisionDisagrees, 0.8, -1, 0.0},
+      {HealthState::kInconsistent, HealthCause::kVisionDisagrees, 0.8, -1, 0.0},  // no distance
       {HealthState::kLost, HealthCause::kFeaturesLost, 0.0, -1, 0.0}};
   for (const Health& h : quiet) {
     EXPECT_EQ(HealthPositionSigma(h), 0.0);

@@ -1,5 +1,6 @@
 #include "image_fusion.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include "extracted_features.hpp"
@@ -60,6 +61,22 @@ int ImageFusion::Apply(const VisualUpdate& u, double& m2) {
     f.Relocate(u.relocate_T_PO, u.relocate_covariance);
     return 0;
   }
+  // How far this update's measurements put the object from the estimate (VisualStep::
+  // displacement): per image, not per joint sample.
+  if (!u.features.empty()) {
+    const Transform T_CO = u.T_PC.inverse() * f.T_PO();
+    displacements_.clear();
+    for (const VisualFeature& v : u.features) {
+      const Vec3 X_C = T_CO * v.x_O;
+      if (X_C.z() > 1e-3)
+        displacements_.push_back((u.K.Project(X_C) - v.pixel).norm() * X_C.z() / u.K.fx);
+    }
+    if (!displacements_.empty()) {
+      const auto mid = displacements_.begin() + static_cast<long>(displacements_.size() / 2);
+      std::nth_element(displacements_.begin(), mid, displacements_.end());
+      step_.displacement = std::max(step_.displacement, *mid);
+    }
+  }
   if (u.widen_position > 0.0) f.WidenPose(u.widen_position, 0.0);
   const int used = f.UpdateVisual(u.features, u.T_PC, u.K);
   step_.used += used;
@@ -85,6 +102,7 @@ void ImageFusion::Fuse(double t_c, const Image8& image, const Transform& T_PC, c
   step_.relocalized = 0.0;
   step_.recovered = false;
   step_.shifts_refused = 0;
+  step_.displacement = 0.0;
   double m2 = 0.0;
   fresh_.clear();
   for (const auto& source : sources_) {

@@ -50,6 +50,7 @@ class ImageFusion {
   std::vector<std::unique_ptr<VisualSource>> sources_;  // extracted features, then tags
   std::vector<TrackedSample> slots_;
   std::vector<VisualUpdate> fresh_;
+  std::vector<double> displacements_;  // one update's, for their median
   VisualStep step_;
 };
 

@@ -373,6 +373,7 @@ struct Tracker::Impl {
     e.features_lost = after.features_lost();
     e.tags_elsewhere = after.tag_disagreements > 0;
     e.relocalized = step.relocalized;
+    e.displacement = step.displacement;
     im.newest_t = history.At(history.last()).t;
     im.replayed = replayed;
     im.recovered = step.recovered;

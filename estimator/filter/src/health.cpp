@@ -54,8 +54,7 @@ const char* HealthCauseName(HealthCause cause) {
 
 double HealthPositionSigma(const Health& h) {
   if (h.state != HealthState::kInconsistent && h.state != HealthState::kLost) return 0.0;
-  if (h.cause != HealthCause::kPressingInAir && h.cause != HealthCause::kPenetration) return 0.0;
-  return std::isfinite(h.value) ? std::abs(h.value) : 0.0;
+  return std::isfinite(h.distance) ? std::abs(h.distance) : 0.0;
 }
 
 Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health) {
@@ -259,6 +258,7 @@ void HealthMonitor::OnImage(const ImageEvidence& image) {
   const int k = images_seen_++ % kMaxWindow;
   offered_[static_cast<std::size_t>(k)] = image.offered;
   used_[static_cast<std::size_t>(k)] = image.used;
+  displacement_[static_cast<std::size_t>(k)] = image.displacement;
   features_lost_ = image.features_lost;
   tags_elsewhere_ = image.tags_elsewhere;
   if (image.relocalized > 0.0) relocalized_ = image.relocalized, relocalized_t_ = image.t_capture;
@@ -266,27 +266,33 @@ void HealthMonitor::OnImage(const ImageEvidence& image) {
 
 void HealthMonitor::Decide(double t) {
   Health h;
-  const auto worse = [&](HealthState s, HealthCause c, double v, int subject) {
+  const auto worse = [&](HealthState s, HealthCause c, double v, int subject,
+                         double distance = 0.0) {
     if (static_cast<int>(s) > static_cast<int>(h.state))
-      h.state = s, h.cause = c, h.value = v, h.subject = subject;
+      h.state = s, h.cause = c, h.value = v, h.subject = subject, h.distance = distance;
   };
   // Inconsistent: the measurements contradict the estimate.
   if (penetration_since_ >= 0.0 && t - penetration_since_ >= params_.sustain)
-    worse(HealthState::kInconsistent, HealthCause::kPenetration, penetration_, penetration_link_);
+    worse(HealthState::kInconsistent, HealthCause::kPenetration, penetration_, penetration_link_,
+          penetration_);
   if (press_since_ >= 0.0 && t - press_since_ >= params_.sustain)
-    worse(HealthState::kInconsistent, HealthCause::kPressingInAir, press_.gap, press_.link);
+    worse(HealthState::kInconsistent, HealthCause::kPressingInAir, press_.gap, press_.link,
+          press_.gap);
   if (tags_elsewhere_) worse(HealthState::kInconsistent, HealthCause::kTagsElsewhere, 0.0, -1);
   {
     const int n = std::min(images_seen_, params_.vision_window);
-    int offered = 0, used = 0;
+    int offered = 0, used = 0, measured = 0;
+    double displacement = 0.0;  // the mean over the window's images that measured anything
     for (int i = 1; i <= n; ++i) {
       const std::size_t k = static_cast<std::size_t>((images_seen_ - i) % kMaxWindow);
       offered += offered_[k];
       used += used_[k];
+      if (offered_[k] > 0) displacement += displacement_[k], ++measured;
     }
     const double gated = offered > 0 ? 1.0 - double(used) / offered : 0.0;
     if (offered >= params_.vision_min_offered && gated > params_.vision_gated_share)
-      worse(HealthState::kInconsistent, HealthCause::kVisionDisagrees, gated, -1);
+      worse(HealthState::kInconsistent, HealthCause::kVisionDisagrees, gated, -1,
+            measured > 0 ? displacement / measured : 0.0);
   }
   // Uncertain: the estimate may be off by more than it can use, and says so.
   if (features_lost_) worse(HealthState::kUncertain, HealthCause::kFeaturesLost, 0.0, -1);

@@ -110,6 +110,11 @@ struct VisualStep {
                                 // explains the hand and fits the image (relocalized: how far),
                                 // nothing else fused
   int shifts_refused = 0;       // whole-object shifts the hand refused (HandPlausibility)
+  double displacement = 0.0;    // [m] how far the image puts the object from the estimate: of
+                                // the measurements offered (features or tag corners), the
+                                // median of the pixel residual at the estimate before the
+                                // update times the point's depth over the focal length (the
+                                // larger of the sources' when both measure)
   std::vector<int> used_match;  // index into match.matches
   std::vector<double> residual_before, residual_after;  // [px]
 };

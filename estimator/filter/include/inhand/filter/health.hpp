@@ -54,9 +54,14 @@ struct Health {
   double value = 0.0;  // the cause's figure (HealthCause)
   int subject = -1;    // the cause's link, or -1
   double since = 0.0;  // [s] when the state began
+  // [m] how far the evidence behind an inconsistent or lost state puts the object from the
+  // estimate, for the causes that measure it: a pressing finger's gap, a link's depth (both the
+  // value), the features' displacement when vision disagrees (ImageEvidence::displacement); 0
+  // otherwise.
+  double distance = 0.0;
   bool operator==(const Health& o) const {
     return state == o.state && cause == o.cause && value == o.value && subject == o.subject &&
-           since == o.since;
+           since == o.since && distance == o.distance;
   }
 };
 // One line for people: "inconsistent since 1.20 s: thumb_tip presses but the object is 23.1 mm
@@ -64,12 +69,13 @@ struct Health {
 std::string HealthMessage(const Health& health, const HandModel& hand);
 
 // What an estimate may claim. A set that is inconsistent or lost because a finger the torques say
-// presses is g from the estimated object, or because a link lies d inside it, knows its estimate is
-// about that far off; its claim must not be tighter. HealthPositionSigma is that distance [m]
-// (g or d), 0 for every other state and cause (they carry no distance). ClaimedPoseCovariance is
-// the filter's pose covariance (δp, δθ) with HealthPositionSigma² added to the position's variance
-// along every axis: what the tracker reports (σ, NEES, the HUD, exports). The filter's own
-// covariance, and so every estimate, stays as it was.
+// presses is g from the estimated object, because a link lies d inside it, or because its gate
+// refuses most of what the images measure, which lies v away at the object's depth, knows its
+// estimate is about that far off; its claim must not be tighter. HealthPositionSigma is that
+// distance [m] (Health::distance: g, d or v), 0 for every other state and cause.
+// ClaimedPoseCovariance is the filter's pose covariance (δp, δθ) with HealthPositionSigma² added to
+// the position's variance along every axis: what the tracker reports (σ, NEES, the HUD, exports).
+// The filter's own covariance, and so every estimate, stays as it was.
 double HealthPositionSigma(const Health& health);
 Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health);
 
@@ -114,6 +120,7 @@ struct ImageEvidence {
   bool features_lost = false;   // VisualMemory::features_lost() after it
   bool tags_elsewhere = false;  // VisualMemory::tag_disagreements > 0 after it
   double relocalized = 0.0;     // [m] VisualStep::relocalized
+  double displacement = 0.0;    // [m] VisualStep::displacement
 };
 
 // The press check's finding: of the fingers whose joint torques say they press, the one whose
@@ -181,6 +188,7 @@ class HealthMonitor {
   int identical_images_ = 0;
   static constexpr int kMaxWindow = 32;
   std::array<int, kMaxWindow> offered_{}, used_{};
+  std::array<double, kMaxWindow> displacement_{};
   int images_seen_ = 0;
   bool features_lost_ = false, tags_elsewhere_ = false;
   double relocalized_ = 0.0, relocalized_t_ = -1.0;
