@@ -207,17 +207,17 @@ class Runner {
     checkpoints_.emplace(0, RunnerCheckpoint{player_->Save(), -1});
     StepTo(0);
   }
-  // Deterministic: going back resumes from the nearest checkpoint at or before k (the run from
-  // there is bit-identical to the first), so a seek never drifts and recomputes at most
-  // CheckpointEvery() samples.
-  // Forward too: from the overview's checkpoints where this player has not been yet, so a seek
-  // anywhere steps at most CheckpointEvery() samples once the overview has passed there.
+  // Deterministic: a seek resumes from the nearest checkpoint at or before k (the run from there
+  // is bit-identical to the first), so it never drifts: the overview's (light, each resuming at a
+  // sample that captures a frame, so that its pictures are drawn afresh; SessionOverview::
+  // CheckpointSpacing apart) wherever it has passed, going back or forward, and this player's own
+  // (full, at the start and every CheckpointEvery() samples beyond the overview's reach).
   void StepTo(int k) {
     k = std::clamp(k, 0, session_.num_samples() - 1);
-    // Those of our checkpoints the overview has got to since: its copy serves.
-    for (auto it = checkpoints_.begin(); overview_ && it != checkpoints_.end();)
-      it = it->first > 0 && overview_->HasCheckpoint(it->first) ? checkpoints_.erase(it)
-                                                                : std::next(it);
+    // Those of our checkpoints the overview's cover since: its serve.
+    const int reach = overview_ ? overview_->CheckpointsReach() : -1;
+    for (auto it = checkpoints_.begin(); it != checkpoints_.end();)
+      it = it->first > 0 && it->first <= reach ? checkpoints_.erase(it) : std::next(it);
     const bool back = k < next_ - 1;
     // The latest checkpoint resuming at or before k + 1 (after next_ unless going back).
     const int after = back ? -1 : next_;
@@ -226,7 +226,7 @@ class Runner {
     if (it != checkpoints_.begin() && std::prev(it)->first > after) resume = std::prev(it)->first;
     SessionPlayer::Checkpoint from_overview;
     int overview_resume = -1, overview_frame = -1;
-    if (overview_ && overview_->CheckpointIn(std::max(after, resume), k + 1, overview_resume,
+    if (overview_ && overview_->CheckpointIn(std::max(after, resume), k, overview_resume,
                                              from_overview, overview_frame)) {
       player_->Restore(from_overview);
       ForgetVisual();
@@ -251,10 +251,10 @@ class Runner {
       if (!session_.info().camera)
         state_.pictures_dirty = true;  // the 3-D view follows every sample
       ++next_;
-      // Only where the overview has none (it has not got there yet): a checkpoint holds a few
-      // MB of images, and the overview's serve going back as well as forward.
+      // Only where the overview's do not reach yet: a checkpoint holds a few MB of images, and
+      // the overview's serve going back as well as forward.
       if (next_ % CheckpointEvery() == 0 && !checkpoints_.count(next_) &&
-          !(overview_ && overview_->HasCheckpoint(next_)))
+          next_ > (overview_ ? overview_->CheckpointsReach() : -1))
         checkpoints_.emplace(next_, RunnerCheckpoint{player_->Save(), last_frame_});
     }
   }
@@ -311,7 +311,8 @@ class Runner {
   int next_ = 0;
   int last_frame_ = -1;
   // Keyed by the sample the run resumes at. A checkpoint holds the last camera and virtual
-  // images (a few MB): every 250 samples (0.5 s at 500 Hz), at most ~50 per session.
+  // images (a few MB): one at the start, then every CheckpointEvery() samples where the overview
+  // has none yet (at most ~50 per session).
   int CheckpointEvery() const { return SessionOverview::CheckpointEvery(session_.num_samples()); }
   struct RunnerCheckpoint {
     SessionPlayer::Checkpoint player;

@@ -137,11 +137,25 @@ const VisualStep& SessionPlayer::last_feature_step() const {
   return no_features_;
 }
 
-SessionPlayer::Checkpoint SessionPlayer::Save() const {
+SessionPlayer::Checkpoint SessionPlayer::Save(bool light) const {
   Checkpoint c;
-  for (const auto& t : trackers_) c.trackers.push_back(t->Save());
+  for (const auto& t : trackers_) {
+    c.trackers.push_back(t->Save());
+    if (light) {
+      VisualStep& v = c.trackers.back().visual;
+      v.virtual_view = RenderOutput();
+      v.match.debug = MatchDebug();
+    }
+  }
   c.state = state_;
+  if (light) c.state.image = Image8();
   return c;
+}
+
+bool SessionPlayer::CapturesFrame(int k) const {
+  const auto& frames = session_.camera_frames();
+  return state_.next_frame < frames.size() &&
+         frames[state_.next_frame].t <= session_.t(k) + kTimeTolerance;
 }
 
 void SessionPlayer::Restore(const Checkpoint& c) {

@@ -162,9 +162,10 @@ long SessionOverview::Read(long version, Data& data, int link) const {
   return version_;
 }
 
-bool SessionOverview::HasCheckpoint(int resume) const {
+int SessionOverview::CheckpointsReach() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return checkpoints_.count(resume) > 0;
+  if (data_.progress.done) return std::numeric_limits<int>::max();
+  return checkpoints_.empty() ? -1 : checkpoints_.rbegin()->first;
 }
 
 bool SessionOverview::CheckpointIn(int after, int at_most, int& resume,
@@ -217,18 +218,22 @@ void SessionOverview::Run(const Session& session, const TrackerParams& params,
     };
     constexpr int kPublish = 250;  // samples
     constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-    const int every = CheckpointEvery(n);
-    int last_frame = -1;
+    const int spacing = CheckpointSpacing(n);
+    const bool camera = !session.camera_frames().empty();
+    int last_frame = -1, last_saved = 0;  // none at 0: the GUI's player keeps its own there
     std::vector<LinkContact> link_contacts;
     for (int k = 0; k < n; ++k) {
       if (stop_) return;
+      // Light, and just before a sample that captures a frame: a player resumed here draws that
+      // frame's pictures afresh (a full checkpoint holds a few MB of them).
+      if (k >= last_saved + spacing && (!camera || player.CapturesFrame(k))) {
+        Saved saved{player.Save(true), last_frame};
+        std::lock_guard<std::mutex> lock(mutex_);
+        checkpoints_.emplace(k, std::move(saved));
+        last_saved = k;
+      }
       player.Step(k);
       if (player.last_frame() >= 0) last_frame = player.last_frame();
-      if ((k + 1) % every == 0 && k + 1 < n) {
-        Saved saved{player.Save(), last_frame};
-        std::lock_guard<std::mutex> lock(mutex_);
-        checkpoints_.emplace(k + 1, std::move(saved));
-      }
       found.t.push_back(session.t(k));
       for (std::size_t i = 0; i < num_sets; ++i) {
         const EstimateRecord& r = player.last(i);

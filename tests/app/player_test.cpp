@@ -306,8 +306,10 @@ TEST(SessionOverview, RecordsEveryVisualMeasurementForItsHistory) {
   EXPECT_GT(measured, static_cast<int>(data.t.size()) / 2);
 }
 
-// The overview keeps checkpoints on its way; a player restored from one (the GUI seeking forward
-// to where it has not been) goes on bit-identically to one that stepped every sample.
+// The overview keeps light checkpoints on its way, each just before a sample that captures a
+// frame; a player restored from one (the GUI seeking to where it has not been) goes on
+// bit-identically to one that stepped every sample, and its first step draws that frame's
+// pictures afresh.
 TEST(SessionOverview, ItsCheckpointsResumeBitIdentically) {
   test::TempDir dir;
   ASSERT_TRUE(SimulateKetchup(dir, "--noise paper --seed 4"));
@@ -315,13 +317,17 @@ TEST(SessionOverview, ItsCheckpointsResumeBitIdentically) {
   const std::vector<app::ModalitySet> sets = app::ParseModalities("jt,jta,jtf");
   app::SessionOverview overview(session, TrackerParams(), sets);
   overview.Wait();
-  const int n = session.num_samples(), every = app::SessionOverview::CheckpointEvery(n);
+  const int n = session.num_samples(), spacing = app::SessionOverview::CheckpointSpacing(n);
   SessionPlayer::Checkpoint c;
   int resume = -1, last_frame = -2;
-  EXPECT_FALSE(overview.CheckpointIn(-1, every - 1, resume, c, last_frame));
+  EXPECT_FALSE(overview.CheckpointIn(-1, spacing - 1, resume, c, last_frame));
   ASSERT_TRUE(overview.CheckpointIn(-1, n / 2, resume, c, last_frame));
-  EXPECT_EQ(resume, n / 2 / every * every);
+  EXPECT_LE(resume, n / 2);
+  EXPECT_GT(resume, n / 2 - 2 * spacing);  // the camera captures every 50 samples
   EXPECT_FALSE(overview.CheckpointIn(resume, n / 2, resume, c, last_frame));  // none after it
+  // Light: no pictures in it.
+  EXPECT_TRUE(c.state.image.empty());
+  for (const TrackerSnapshot& s : c.trackers) EXPECT_TRUE(s.visual.virtual_view.depth.empty());
   SessionPlayer stepped(session, TrackerParams(), sets), restored(session, TrackerParams(), sets);
   int frame = -1;
   for (int k = 0; k < resume; ++k) {
@@ -329,8 +335,14 @@ TEST(SessionOverview, ItsCheckpointsResumeBitIdentically) {
     if (stepped.last_frame() >= 0) frame = stepped.last_frame();
   }
   EXPECT_EQ(last_frame, frame);
+  EXPECT_TRUE(stepped.CapturesFrame(resume));
   restored.Restore(c);
-  for (int k = resume; k < n; ++k) {
+  restored.Step(resume), stepped.Step(resume);
+  EXPECT_EQ(restored.last_frame(), frame + 1);
+  EXPECT_FALSE(restored.last_image().empty());
+  EXPECT_EQ(restored.last_feature_step().virtual_view.depth,
+            stepped.last_feature_step().virtual_view.depth);
+  for (int k = resume + 1; k < n; ++k) {
     stepped.Step(k), restored.Step(k);
     for (std::size_t i = 0; i < sets.size(); ++i)
       ASSERT_TRUE(stepped.last(i).T_PO.matrix() == restored.last(i).T_PO.matrix() &&

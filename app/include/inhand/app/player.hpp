@@ -49,8 +49,14 @@ class SessionPlayer {
     std::vector<TrackerSnapshot> trackers;
     StepState state;
   };
-  Checkpoint Save() const;
+  // `light`: without the pictures (the camera image, each set's virtual view and matching
+  // stages; tens of KB instead of a few MB). Stepping on from a light checkpoint gives the same
+  // estimates, but the last frame's pictures are gone until the next frame is fused: save one just
+  // before a sample that captures a frame (CapturesFrame), and Step it first.
+  Checkpoint Save(bool light = false) const;
   void Restore(const Checkpoint& c);
+  // Whether Step(k), after the samples before it, processes a camera frame.
+  bool CapturesFrame(int k) const;
 
   const std::vector<ModalitySet>& sets() const { return sets_; }
   const Tracker& tracker(std::size_t i) const { return *trackers_[i]; }

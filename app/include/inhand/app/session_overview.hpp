@@ -109,15 +109,20 @@ class SessionOverview {
   // Blocks until the whole session is replayed.
   void Wait();
 
-  // On its way the replay keeps a checkpoint every CheckpointEvery(samples) samples (at most ~50),
-  // so the GUI's player can seek forward to places it has not stepped through yet. The latest
-  // one resuming at a sample in (after, at_most]: false when none. `resume` is the sample it
-  // resumes at, `last_frame` the last camera frame processed before it (-1: none).
+  // On its way the replay keeps a light checkpoint (SessionPlayer::Save) at least
+  // CheckpointSpacing(samples) samples apart, each resuming at a sample that captures a camera
+  // frame (in a session without a camera, at any), so that the GUI's player can seek anywhere it
+  // has passed and step at most about that far, the frame it shows drawn afresh. The latest one
+  // resuming at a sample in (after, at_most]: false when none. `resume` is the sample it resumes
+  // at (Step it first), `last_frame` the last camera frame processed before it (-1: none).
   bool CheckpointIn(int after, int at_most, int& resume, SessionPlayer::Checkpoint& checkpoint,
                     int& last_frame) const;
+  static int CheckpointSpacing(int samples) { return std::max(50, samples / 2000); }
+  // The GUI's own full checkpoints, where the overview has not been yet.
   static int CheckpointEvery(int samples) { return std::max(125, samples / 50); }
-  // Whether the overview has a checkpoint resuming at sample `resume`.
-  bool HasCheckpoint(int resume) const;
+  // The last sample the overview's checkpoints cover: its latest checkpoint's, or every sample
+  // once the replay is done (-1: none yet).
+  int CheckpointsReach() const;
 
  private:
   void Run(const Session& session, const TrackerParams& params, std::vector<ModalitySet> sets);
