@@ -113,6 +113,28 @@ TEST(Filter, TheCameraErrorIsEstimatedAndKeptAcrossFrames) {
   for (const auto& v : f.trace().visual) EXPECT_LT((v.measured - v.predicted).norm(), 0.2);
 }
 
+// The trace keeps each point's depth at the prior beside its measured and predicted pixels, so a
+// caller can tell how far the image puts the object: with the camera 3 mm off across its axis,
+// every residual × depth / fx is 3 mm (to the pinhole's second order), and the depth is the
+// point's z in the camera.
+TEST(Filter, TheTraceGivesEachPointsDepthForTheDisplacement) {
+  FingerScene s;
+  const Intrinsics K = TestIntrinsics();
+  const Vec3 p(0.0, 0.06, 0.04);
+  const Transform T_PC = CameraLookingAt(p);
+  const Transform T_PC_true = T_PC * MakeTransform(Vec3(0.003, 0, 0), Mat3::Identity());
+  const std::vector<VisualFeature> features = FeaturesSeenFrom(T_PC_true, K, p);
+  Filter f = s.Started(At(p), FilterParams(), false);
+  f.UpdateVisual(features, T_PC, K);
+  ASSERT_EQ(f.trace().visual.size(), features.size());
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    const FilterTrace::Visual& v = f.trace().visual[i];
+    const Vec3 X_C = T_PC.inverse() * (p + features[i].x_O);
+    EXPECT_NEAR(v.depth, X_C.z(), 1e-12);
+    EXPECT_NEAR((v.measured - v.predicted).norm() * v.depth / K.fx, 0.003, 0.0002);
+  }
+}
+
 // WidenPose adds σ² to each axis of the pose's variance and nothing elsewhere; a negative or
 // non-finite σ is refused.
 TEST(Filter, WidenPoseAddsToThePoseVarianceOnly) {

@@ -61,29 +61,25 @@ int ImageFusion::Apply(const VisualUpdate& u, double& m2) {
     f.Relocate(u.relocate_T_PO, u.relocate_covariance);
     return 0;
   }
-  // How far this update's measurements put the object from the estimate (VisualStep::
-  // displacement): per image, not per joint sample.
-  if (!u.features.empty()) {
-    const Transform T_CO = u.T_PC.inverse() * f.T_PO();
-    displacements_.clear();
-    for (const VisualFeature& v : u.features) {
-      const Vec3 X_C = T_CO * v.x_O;
-      if (X_C.z() > 1e-3)
-        displacements_.push_back((u.K.Project(X_C) - v.pixel).norm() * X_C.z() / u.K.fx);
-    }
-    if (!displacements_.empty()) {
-      const auto mid = displacements_.begin() + static_cast<long>(displacements_.size() / 2);
-      std::nth_element(displacements_.begin(), mid, displacements_.end());
-      step_.displacement = std::max(step_.displacement, *mid);
-    }
-  }
   if (u.widen_position > 0.0) f.WidenPose(u.widen_position, 0.0);
   const int used = f.UpdateVisual(u.features, u.T_PC, u.K);
   step_.used += used;
   step_.offered += static_cast<int>(u.features.size());
   const auto& visual = f.trace().visual;
-  for (std::size_t i = visual.size() - u.features.size(); i < visual.size(); ++i)
-    m2 += visual[i].mahalanobis;
+  // How far this update's measurements put the object from the estimate before it (VisualStep::
+  // displacement): each residual at its point's depth, from the filter's own projections.
+  displacements_.clear();
+  for (std::size_t i = visual.size() - u.features.size(); i < visual.size(); ++i) {
+    const FilterTrace::Visual& v = visual[i];
+    m2 += v.mahalanobis;
+    if (v.depth > 1e-3)
+      displacements_.push_back((v.measured - v.predicted).norm() * v.depth / u.K.fx);
+  }
+  if (!displacements_.empty()) {
+    const auto mid = displacements_.begin() + static_cast<long>(displacements_.size() / 2);
+    std::nth_element(displacements_.begin(), mid, displacements_.end());
+    step_.displacement = std::max(step_.displacement, *mid);
+  }
   return used;
 }
 

@@ -33,6 +33,7 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
       continue;
     }
     rec.predicted = K.Project(X_C);
+    rec.depth = X_C.z();
     H2_.leftCols<6>() = VisualMeasurementJacobian(X, s_.p, T_PC, K);
     if (camera_state_) H2_.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
     const Eigen::Vector2d r = f.pixel - rec.predicted;

@@ -47,6 +47,7 @@ struct FilterTrace {
     int id = -1;                    // caller's feature id (tag id*4+corner, match index, ...)
     Vec2 measured = Vec2::Zero();   // [px] undistorted
     Vec2 predicted = Vec2::Zero();  // [px] at the prior
+    double depth = 0.0;             // [m] of the point in the camera at the prior; 0 if behind it
     double mahalanobis = 0.0;
     bool gated = false;
   };
