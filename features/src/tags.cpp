@@ -156,10 +156,9 @@ std::vector<TagDetection> TagDetector::Detect(const Image8& image, const PixelRe
   Impl& d = *impl_;
   INHAND_CHECK(image.channels == 1 || image.channels == 3,
                "tag detection needs a grey or RGB image");
-  const PixelRect r{std::max(region.x0, 0), std::max(region.y0, 0),
-                    std::min(region.x1, image.width), std::min(region.y1, image.height)};
+  const PixelRect r = region.ClippedTo(image.width, image.height);
   if (r.empty()) return {};
-  const int w = r.x1 - r.x0, h = r.y1 - r.y0;
+  const int w = r.width(), h = r.height();
   // libapriltag's quad detection reads out of bounds (SIGSEGV) on images whose decimated height
   // is under 3 px (1 x 2 at decimate 1, 100 x 4 at decimate 2: measured for decimate 1-4 on
   // 1-24 px); no tag fits in fewer than 8 px anyway (tag16h5 is 8 modules wide).

@@ -18,6 +18,25 @@
 
 namespace inhand {
 
+namespace {
+
+// Copies `row` (a whole row's values) into every element of a width x height image outside
+// `inside`: the rows above and below it whole, the columns left and right of it in its rows.
+template <typename T>
+void FillOutside(T* data, int width, int height, const PixelRect& inside, const T* row) {
+  for (int y = 0; y < height; ++y) {
+    T* out = data + std::size_t(y) * width;
+    if (y < inside.y0 || y >= inside.y1 || inside.empty()) {
+      std::copy_n(row, width, out);
+    } else {
+      std::copy_n(row, inside.x0, out);
+      std::copy(row + inside.x1, row + width, out + inside.x1);
+    }
+  }
+}
+
+}  // namespace
+
 Eigen::Matrix4d ProjectionMatrix(const Intrinsics& K, double n, double f) {
   const double W = K.width, H = K.height;
   Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
@@ -136,6 +155,7 @@ void main() {
   X(ReadBuffer)                         \
   X(ReadPixels)                         \
   X(RenderbufferStorage)                \
+  X(Scissor)                            \
   X(ShaderSource)                       \
   X(TexImage2D)                         \
   X(TexParameteri)                      \
@@ -395,6 +415,19 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
                        static_cast<float>(scene.background.z()), 1.0f};
   const GLuint zero_label[4] = {0, 0, 0, 0};
   const float zero_depth[4] = {0, 0, 0, 0};
+  // A region: cleared, drawn and read back only there; elsewhere the background's colour as GL
+  // stores it, cleared into one pixel outside the region and read from it.
+  const PixelRect region =
+      scene.region.empty() ? PixelRect{0, 0, W, H} : scene.region.ClippedTo(W, H);
+  const bool partial = region.width() != W || region.height() != H;
+  const bool outside_at_origin = region.x0 > 0 || region.y0 > 0;  // else the last pixel is out
+  const int outside_x = outside_at_origin ? 0 : W - 1, outside_y = outside_at_origin ? 0 : H - 1;
+  if (partial) {
+    gl.Enable(GL_SCISSOR_TEST);
+    gl.Scissor(outside_x, outside_y, 1, 1);
+    gl.ClearBufferfv(GL_COLOR, 0, bg);
+    gl.Scissor(region.x0, region.y0, region.width(), region.height());
+  }
   gl.ClearBufferfv(GL_COLOR, 0, bg);
   gl.ClearBufferuiv(GL_COLOR, 1, zero_label);
   gl.ClearBufferfv(GL_COLOR, 2, zero_depth);
@@ -454,27 +487,54 @@ void Renderer::Render(const Scene& scene, RenderOutput& out, bool with_depth_and
   }
   gl.BindVertexArray(0);
 
-  // Read back straight into the output: the projection put the top image row first.
+  // Read back straight into the output: the projection put the top image row first. Outside a
+  // region, the background.
   out.width = W;
   out.height = H;
   if (out.colour.width != W || out.colour.height != H || out.colour.channels != 3)
     out.colour = Image8(W, H, 3);
   gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-  gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
-  gl.ReadPixels(0, 0, W, H, GL_RGB, GL_UNSIGNED_BYTE, out.colour.data.data());
+  gl.PixelStorei(GL_PACK_ROW_LENGTH, W);
+  const auto read = [&](GLenum buffer, GLenum format, GLenum type, std::size_t bytes, void* data) {
+    gl.ReadBuffer(buffer);
+    if (region.empty()) return;
+    gl.ReadPixels(
+        region.x0, region.y0, region.width(), region.height(), format, type,
+        static_cast<std::uint8_t*>(data) + (std::size_t(region.y0) * W + region.x0) * bytes);
+  };
+  if (partial) {
+    std::uint8_t background[3];
+    gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
+    gl.ReadPixels(outside_x, outside_y, 1, 1, GL_RGB, GL_UNSIGNED_BYTE, background);
+    std::vector<std::uint8_t> row(std::size_t(W) * 3);
+    for (std::size_t i = 0; i < row.size(); i += 3) std::copy_n(background, 3, &row[i]);
+    FillOutside(out.colour.data.data(), W * 3, H,
+                PixelRect{region.x0 * 3, region.y0, region.x1 * 3, region.y1}, row.data());
+  }
+  read(GL_COLOR_ATTACHMENT0, GL_RGB, GL_UNSIGNED_BYTE, 3, out.colour.data.data());
   if (with_depth_and_labels) {
     out.depth.resize(std::size_t(W) * H);
     out.label.resize(std::size_t(W) * H);
-    gl.ReadBuffer(GL_COLOR_ATTACHMENT2);
-    gl.ReadPixels(0, 0, W, H, GL_RED, GL_FLOAT, out.depth.data());
-    for (float& z : out.depth)
-      if (!(z > 0.0f)) z = std::numeric_limits<float>::infinity();
-    gl.ReadBuffer(GL_COLOR_ATTACHMENT1);
-    gl.ReadPixels(0, 0, W, H, GL_RED_INTEGER, GL_UNSIGNED_SHORT, out.label.data());
+    if (partial) {
+      const std::vector<float> inf(std::size_t(W), std::numeric_limits<float>::infinity());
+      const std::vector<std::uint16_t> none(std::size_t(W), 0);
+      FillOutside(out.depth.data(), W, H, region, inf.data());
+      FillOutside(out.label.data(), W, H, region, none.data());
+    }
+    read(GL_COLOR_ATTACHMENT2, GL_RED, GL_FLOAT, sizeof(float), out.depth.data());
+    for (int y = region.y0; y < region.y1; ++y)
+      for (int x = region.x0; x < region.x1; ++x) {
+        float& z = out.depth[std::size_t(y) * W + x];
+        if (!(z > 0.0f)) z = std::numeric_limits<float>::infinity();
+      }
+    read(GL_COLOR_ATTACHMENT1, GL_RED_INTEGER, GL_UNSIGNED_SHORT, sizeof(std::uint16_t),
+         out.label.data());
   } else {
     out.depth.clear();
     out.label.clear();
   }
+  gl.PixelStorei(GL_PACK_ROW_LENGTH, 0);
+  if (partial) gl.Disable(GL_SCISSOR_TEST);
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 

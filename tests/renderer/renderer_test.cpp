@@ -210,6 +210,54 @@ TEST(Renderer, LabelImageIdentifiesTheLinks) {
   EXPECT_EQ(out.label_at(2, 2), 0);
 }
 
+// A region renders its pixels as the whole image does, to the bit (colour, depth, labels), and
+// nothing else: every pixel outside is the background (the colour GL stores for it, depth +inf,
+// label 0), also when the same output held a whole render before. A region partly outside the
+// image is clipped; one wholly outside leaves the background everywhere.
+TEST(Renderer, ARegionIsTheWholeRendersPixelsAndTheBackgroundElsewhere) {
+  Renderer& r = SharedRenderer();
+  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
+  const HandMeshes meshes = UploadHand(r, hand);
+  KinematicsData kin(hand);
+  kin.Update(hand, Eigen::VectorXd::Zero(hand.num_q()));
+  Scene scene;
+  scene.K = Camera(320, 240);
+  scene.T_PC = LookAt(Vec3(0, 0.07, 0.35), Vec3(0, 0.07, 0), Vec3::UnitY());
+  scene.background = Vec3(0.5, 0.25, 0.75);
+  AddHand(scene, meshes, kin.link_poses());
+  RenderOutput whole, part;
+  r.Render(scene, whole);
+  r.Render(scene, part);  // the output held a whole render: the region must clear the rest
+  // The background as GL stores it: a corner the hand does not reach.
+  const std::uint8_t* bg = whole.colour.pixel(0, 0);
+  ASSERT_EQ(whole.label_at(0, 0), 0);
+  for (const PixelRect& region :
+       {PixelRect{90, 40, 250, 200}, PixelRect{-30, 100, 170, 400}, PixelRect{400, 10, 500, 50}}) {
+    scene.region = region;
+    r.Render(scene, part);
+    const PixelRect in = region.ClippedTo(320, 240);
+    int drawn = 0;
+    for (int y = 0; y < 240; ++y)
+      for (int x = 0; x < 320; ++x) {
+        const bool inside = x >= in.x0 && x < in.x1 && y >= in.y0 && y < in.y1;
+        const std::size_t i = std::size_t(y) * 320 + x;
+        if (inside) {
+          ASSERT_TRUE(std::equal(whole.colour.pixel(x, y), whole.colour.pixel(x, y) + 3,
+                                 part.colour.pixel(x, y)))
+              << x << "," << y;
+          ASSERT_EQ(whole.label[i], part.label[i]) << x << "," << y;
+          ASSERT_EQ(whole.depth[i], part.depth[i]) << x << "," << y;
+          drawn += part.label[i] != 0;
+        } else {
+          ASSERT_TRUE(std::equal(bg, bg + 3, part.colour.pixel(x, y))) << x << "," << y;
+          ASSERT_EQ(part.label[i], 0) << x << "," << y;
+          ASSERT_EQ(part.depth[i], std::numeric_limits<float>::infinity()) << x << "," << y;
+        }
+      }
+    EXPECT_EQ(drawn > 0, !in.empty());  // the palm is in the middle of the image: in both
+  }
+}
+
 // A hand as dark as the Allegro's black anodised links (Kd 0.004) is a flat black silhouette in
 // the external 3-D view: its fingers cannot be told from the palm behind them. The explanatory
 // views draw it in its LegibleColour, which shows the shading: across the hand's pixels the

@@ -35,12 +35,6 @@ struct TagDetectorParams {
   void Validate() const;
 };
 
-// A rectangle of pixels: columns [x0, x1), rows [y0, y1).
-struct PixelRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  bool empty() const { return x1 <= x0 || y1 <= y0; }
-};
-
 class TagDetector {
  public:
   explicit TagDetector(const TagDetectorParams& params = {});

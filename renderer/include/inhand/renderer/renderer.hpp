@@ -30,6 +30,11 @@ struct Scene {
   Eigen::Vector3d background{0.0, 0.0, 0.0};
   double near = 0.01;  // [m] clipping planes along the optical axis
   double far = 20.0;
+  // Not empty: only these pixels are drawn (clipped to the image); they are the whole render's
+  // to the bit, and every other pixel is the background (depth +inf, label 0). What costs is
+  // the pixels drawn and read back: a view that a step reads only around the object renders
+  // only there.
+  PixelRect region;
 };
 
 struct RenderOutput {

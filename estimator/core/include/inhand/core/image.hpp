@@ -21,4 +21,19 @@ struct Image8 {
   }
 };
 
+// A rectangle of pixels: columns [x0, x1), rows [y0, y1).
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  // The part within a width x height image (empty if none).
+  PixelRect ClippedTo(int width, int height) const {
+    PixelRect r{x0 < 0 ? 0 : x0, y0 < 0 ? 0 : y0, x1 > width ? width : x1,
+                y1 > height ? height : y1};
+    if (r.empty()) r = PixelRect{};
+    return r;
+  }
+};
+
 }  // namespace inhand
