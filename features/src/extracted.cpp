@@ -47,10 +47,13 @@ int MatchResult::num_inliers() const {
 
 namespace {
 
-cv::Mat Grey(const Image8& im) {
-  const cv::Mat m(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3,
-                  const_cast<std::uint8_t*>(im.data.data()));
-  if (im.channels == 1) return m.clone();
+cv::Mat Wrap(const Image8& im) {
+  return cv::Mat(im.height, im.width, im.channels == 1 ? CV_8UC1 : CV_8UC3,
+                 const_cast<std::uint8_t*>(im.data.data()));
+}
+
+cv::Mat Grey(const cv::Mat& m) {
+  if (m.channels() == 1) return m.clone();
   cv::Mat g;
   cv::cvtColor(m, g, cv::COLOR_RGB2GRAY);
   return g;
@@ -74,7 +77,7 @@ bool BinsAgree(int a, int b, int bins) {
   return std::min(d, bins - d) <= 1;
 }
 
-EdgeData Edges(const Image8& im, const FeatureParams& p) {
+EdgeData Edges(const cv::Mat& im, const FeatureParams& p) {
   cv::Mat g = Grey(im);
   if (p.blur_sigma > 0) cv::GaussianBlur(g, g, cv::Size(0, 0), p.blur_sigma);
   EdgeData e;
@@ -97,13 +100,37 @@ EdgeData Edges(const Image8& im, const FeatureParams& p) {
   return e;
 }
 
+// The edges of `im` within `keep` (zero elsewhere), found over `keep` grown by kRegionBorder:
+// the same as the whole image's there, but for an edge that leaves that border and comes back.
+EdgeData EdgesWithin(const Image8& im, const cv::Rect& keep, const FeatureParams& p) {
+  EdgeData e;
+  e.edges = cv::Mat::zeros(im.height, im.width, CV_8U);
+  e.orientation = cv::Mat::zeros(im.height, im.width, CV_8U);
+  if (keep.empty()) return e;
+  const cv::Rect computed =
+      cv::Rect(keep.x - kRegionBorder, keep.y - kRegionBorder, keep.width + 2 * kRegionBorder,
+               keep.height + 2 * kRegionBorder) &
+      cv::Rect(0, 0, im.width, im.height);
+  const EdgeData part = Edges(Wrap(im)(computed), p);
+  const cv::Rect in_part(keep.x - computed.x, keep.y - computed.y, keep.width, keep.height);
+  part.edges(in_part).copyTo(e.edges(keep));
+  part.orientation(in_part).copyTo(e.orientation(keep));
+  return e;
+}
+
 // Harris corners of an edge image: local maxima above a share of the maximum, strongest first,
-// at least min_distance apart. `keep` filters candidates (virtual: on the object).
+// at least min_distance apart. `keep` filters candidates (virtual: on the object). Only edges
+// within `area` count (none elsewhere: the response is zero farther than the Harris window).
 std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p,
-                                const std::vector<std::uint8_t>* mask,
-                                std::vector<Vec2>* rejected) {
+                                const std::vector<std::uint8_t>* mask, std::vector<Vec2>* rejected,
+                                cv::Rect area = cv::Rect()) {
+  if (area.empty()) area = cv::Rect(0, 0, edges.cols, edges.rows);
+  const int reach = p.harris_block + 2;  // the window and the Sobel aperture
+  area = cv::Rect(area.x - reach, area.y - reach, area.width + 2 * reach, area.height + 2 * reach) &
+         cv::Rect(0, 0, edges.cols, edges.rows);
+  if (area.empty()) return {};
   cv::Mat f, response;
-  edges.convertTo(f, CV_32F, 1.0 / 255.0);
+  edges(area).convertTo(f, CV_32F, 1.0 / 255.0);
   cv::cornerHarris(f, response, p.harris_block, 3, p.harris_k);
   double max_r = 0.0;
   cv::minMaxLoc(response, nullptr, &max_r);
@@ -125,8 +152,9 @@ std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p,
                    [](const Candidate& a, const Candidate& b) { return a.r > b.r; });
   std::vector<Vec2> out;
   for (const Candidate& c : cands) {
-    const Vec2 pt(c.x, c.y);
-    const bool on_object = mask == nullptr || (*mask)[std::size_t(c.y) * edges.cols + c.x] != 0;
+    const Vec2 pt(c.x + area.x, c.y + area.y);
+    const bool on_object =
+        mask == nullptr || (*mask)[std::size_t(c.y + area.y) * edges.cols + c.x + area.x] != 0;
     bool far = true;
     for (const Vec2& q : out) far = far && (q - pt).norm() >= p.min_corner_distance;
     if (on_object && far && static_cast<int>(out.size()) < p.max_corners)
@@ -225,23 +253,65 @@ GlobalResult GlobalShift(const EdgeData& re, const EdgeData& ve,
 
 }  // namespace
 
+PixelRect SearchRegion(const Eigen::AlignedBox2d& object, const FeatureParams& p, int width,
+                       int height) {
+  if (object.isEmpty() || !object.min().allFinite() || !object.max().allFinite()) return {};
+  const int search = p.global_search_radius > 0
+                         ? p.global_search_radius + p.search_radius +
+                               static_cast<int>(std::ceil(p.global_truncation)) + 1
+                         : p.search_radius;
+  const double margin = p.piece_radius + search + kRegionBorder;
+  const auto at = [](double v) { return static_cast<int>(std::clamp(v, -1e6, 1e6)); };
+  return PixelRect{
+      at(std::floor(object.min().x() - margin)), at(std::floor(object.min().y() - margin)),
+      at(std::ceil(object.max().x() + margin)) + 1, at(std::ceil(object.max().y() + margin)) + 1}
+      .ClippedTo(width, height);
+}
+
+PixelRect DrawnRegion(const Eigen::AlignedBox2d& object, const FeatureParams& p, int width,
+                      int height) {
+  FeatureParams none = p;
+  none.global_search_radius = 0;
+  none.search_radius = 3;  // the object mask's growth (MatchFeatures' virtual edges)
+  return SearchRegion(object, none, width, height);
+}
+
 std::vector<Vec2> EdgeCorners(const Image8& edges, const FeatureParams& p) {
   p.Validate();
   INHAND_CHECK(edges.channels == 1, "EdgeCorners takes a grey edge image");
-  const cv::Mat m(edges.height, edges.width, CV_8UC1, const_cast<std::uint8_t*>(edges.data.data()));
-  return HarrisCorners(m, p, nullptr, nullptr);
+  return HarrisCorners(Wrap(edges), p, nullptr, nullptr);
 }
 
-MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
-                          const std::vector<std::uint8_t>* object_mask, const FeatureParams& p,
-                          const std::vector<std::uint8_t>* occluder_mask, bool camera_corners) {
-  p.Validate();
-  INHAND_CHECK(real.width == virtual_image.width && real.height == virtual_image.height,
-               "images of different sizes");
+namespace {
+
+// The five steps over the whole of the images (MatchFeatures crops a region first).
+// `origin`: where these images lie in the whole ones; the matches are reported there (the same
+// arithmetic as on the whole images: the same pixels to the bit), the debug output here.
+MatchResult MatchWhole(const Image8& real, const Image8& virtual_image,
+                       const std::vector<std::uint8_t>* object_mask, const FeatureParams& p,
+                       const std::vector<std::uint8_t>* occluder_mask, bool camera_corners,
+                       const Vec2& origin) {
   MatchResult result;
   MatchDebug& dbg = result.debug;
-  // 1. Canny.
-  const EdgeData re = Edges(real, p), ve = Edges(virtual_image, p);
+  const int W = real.width, H = real.height, R = p.piece_radius, S = p.search_radius;
+  // 1. Canny. In the virtual image only near the object (its mask's box grown by a piece and the
+  // mask's growth below): all that a piece, step 0 or a corner on the object reads. The corners'
+  // threshold is thus a share of the strongest near the object, not of the hand's far away, and
+  // a view drawn only around the object (DrawnRegion) has the same edges as a whole one.
+  cv::Rect around(0, 0, W, H);
+  if (object_mask) {
+    INHAND_CHECK(object_mask->size() == std::size_t(W) * H, "object mask of another size");
+    int x0 = W, y0 = H, x1 = -1, y1 = -1;
+    for (int y = 0; y < H; ++y) {
+      const std::uint8_t* row = object_mask->data() + std::size_t(y) * W;
+      for (int x = 0; x < W; ++x)
+        if (row[x]) x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = y;
+    }
+    around = x1 < 0 ? cv::Rect()
+                    : cv::Rect(x0 - R - 3, y0 - R - 3, x1 - x0 + 2 * R + 7, y1 - y0 + 2 * R + 7) &
+                          cv::Rect(0, 0, W, H);
+  }
+  const EdgeData re = Edges(Wrap(real), p), ve = EdgesWithin(virtual_image, around, p);
   dbg.real_edges = ToImage(re.edges);
   dbg.virtual_edges = ToImage(ve.edges);
   // The object mask, grown a little: silhouette edges lie on its border.
@@ -274,9 +344,8 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
   }
   // 2. Harris on the edge images.
   if (camera_corners) dbg.real_corners = HarrisCorners(re.edges, p, nullptr, nullptr);
-  dbg.virtual_corners =
-      HarrisCorners(ve.edges, p, object_mask ? &grown : nullptr, &dbg.virtual_corners_rejected);
-  const int W = real.width, H = real.height, R = p.piece_radius, S = p.search_radius;
+  dbg.virtual_corners = HarrisCorners(ve.edges, p, object_mask ? &grown : nullptr,
+                                      &dbg.virtual_corners_rejected, around);
   // 3. Contour pieces: virtual edge pixels around each corner (offsets and orientation bins).
   struct PieceEdge {
     int dx, dy, bin;
@@ -357,7 +426,7 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
     }
     FeatureMatch m;
     m.id = static_cast<int>(i);
-    m.virtual_px = dbg.virtual_corners[i];
+    m.virtual_px = dbg.virtual_corners[i] + origin;
     m.real_px = m.virtual_px + Vec2(ox + mx / wsum, oy + my / wsum);
     m.vote_fraction = fraction;
     result.matches.push_back(m);
@@ -406,6 +475,66 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
     result.matches[0].inlier = false;  // one match cannot be checked against anything
   }
   return result;
+}
+
+Image8 Crop(const Image8& im, const PixelRect& r) {
+  Image8 out(r.width(), r.height(), im.channels);
+  const std::size_t row = std::size_t(r.width()) * im.channels;
+  for (int y = 0; y < r.height(); ++y) std::copy_n(im.pixel(r.x0, r.y0 + y), row, out.pixel(0, y));
+  return out;
+}
+
+std::vector<std::uint8_t> Crop(const std::vector<std::uint8_t>& mask, int width,
+                               const PixelRect& r) {
+  std::vector<std::uint8_t> out(std::size_t(r.width()) * r.height());
+  for (int y = 0; y < r.height(); ++y)
+    std::copy_n(&mask[std::size_t(r.y0 + y) * width + r.x0], r.width(),
+                &out[std::size_t(y) * r.width()]);
+  return out;
+}
+
+// An edge image of the region, put back in a whole image of zeros.
+Image8 Uncrop(const Image8& part, int width, int height, const PixelRect& r) {
+  Image8 out(width, height, part.channels);
+  if (part.empty()) return out;
+  const std::size_t row = std::size_t(r.width()) * part.channels;
+  for (int y = 0; y < r.height(); ++y)
+    std::copy_n(part.pixel(0, y), row, out.pixel(r.x0, r.y0 + y));
+  return out;
+}
+
+}  // namespace
+
+MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
+                          const std::vector<std::uint8_t>* object_mask, const FeatureParams& p,
+                          const std::vector<std::uint8_t>* occluder_mask, bool camera_corners,
+                          const PixelRect& region) {
+  p.Validate();
+  INHAND_CHECK(real.width == virtual_image.width && real.height == virtual_image.height,
+               "images of different sizes");
+  const int W = real.width, H = real.height;
+  const PixelRect r = region.empty() ? PixelRect{0, 0, W, H} : region.ClippedTo(W, H);
+  if (r.width() == W && r.height() == H)
+    return MatchWhole(real, virtual_image, object_mask, p, occluder_mask, camera_corners,
+                      Vec2::Zero());
+  if (r.empty()) return MatchResult();
+  INHAND_CHECK(!object_mask || object_mask->size() == std::size_t(W) * H,
+               "object mask of another size");
+  INHAND_CHECK(!occluder_mask || occluder_mask->size() == std::size_t(W) * H,
+               "occluder mask of another size");
+  std::vector<std::uint8_t> object, occluder;
+  if (object_mask) object = Crop(*object_mask, W, r);
+  if (occluder_mask) occluder = Crop(*occluder_mask, W, r);
+  const Vec2 o(r.x0, r.y0);
+  MatchResult m = MatchWhole(Crop(real, r), Crop(virtual_image, r), object_mask ? &object : nullptr,
+                             p, occluder_mask ? &occluder : nullptr, camera_corners, o);
+  // The corners back to the whole image's pixels (whole numbers: exact).
+  MatchDebug& d = m.debug;
+  for (auto* points : {&d.real_corners, &d.virtual_corners, &d.virtual_corners_rejected})
+    for (Vec2& q : *points) q += o;
+  d.real_edges = Uncrop(d.real_edges, W, H, r);
+  d.virtual_edges = Uncrop(d.virtual_edges, W, H, r);
+  return m;
 }
 
 }  // namespace inhand

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "bench_paths.hpp"
+#include "inhand/features/extracted.hpp"
 #include "inhand/io/object_loader.hpp"
 #include "inhand/io/urdf_loader.hpp"
 #include "inhand/kinematics/kinematics.hpp"
@@ -18,9 +19,11 @@ namespace {
 struct RenderScene {
   Renderer renderer;
   Scene scene;
+  Aabb bounds;  // the object's
   RenderScene(const std::string& object_file) {
     const HandModel hand = LoadHandModel(kRoot + "/assets/hands/inhand_hand/inhand_hand.urdf");
     const ObjectModel object = LoadObjectModel(object_file);
+    bounds = object.Bounds();
     KinematicsData kin(hand);
     kin.Update(hand, Eigen::VectorXd::Constant(hand.num_q(), 0.6));
     scene.K = IntrinsicsFromFov(640, 480, 45);
@@ -30,14 +33,27 @@ struct RenderScene {
     AddObject(scene, UploadObject(renderer, object),
               MakeTransform(Vec3(0, 0.05, 0.045), ExpSO3(Vec3(0, M_PI / 2, 0))));
   }
+  // The object's bounds in the image of `s` (as the tracker finds them).
+  Eigen::AlignedBox2d ObjectBox(const Scene& s) const {
+    Eigen::AlignedBox2d box;
+    for (const SceneItem& item : s.items)
+      if (item.label == kObjectLabel)
+        for (int i = 0; i < 8; ++i)
+          box.extend(s.K.Project(s.T_PC.inverse() * item.T_PM *
+                                 Vec3(i & 1 ? bounds.max.x() : bounds.min.x(),
+                                      i & 2 ? bounds.max.y() : bounds.min.y(),
+                                      i & 4 ? bounds.max.z() : bounds.min.z())));
+    return box;
+  }
 };
 
-void Render(benchmark::State& state, const std::string& object, bool depth) {
+void Render(benchmark::State& state, const std::string& object, bool depth, bool region = false) {
   if (!std::filesystem::exists(object)) {
     state.SkipWithError("object absent");
     return;
   }
   RenderScene s(object);
+  if (region) s.scene.region = DrawnRegion(s.ObjectBox(s.scene), FeatureParams(), 640, 480);
   RenderOutput out;
   s.renderer.Render(s.scene, out, depth);  // warm-up: shader compilation, textures
   for (auto _ : state) {
@@ -49,6 +65,10 @@ void Render(benchmark::State& state, const std::string& object, bool depth) {
 void BM_Render640_HandKetchup_ColourDepthLabels(benchmark::State& s) {
   Render(s, kRoot + "/assets/objects/ketchup_bottle/object.json", true);
 }
+// The extracted-feature step's virtual view: only around the object (DrawnRegion).
+void BM_Render640_HandKetchup_ColourDepthLabels_DrawnRegion(benchmark::State& s) {
+  Render(s, kRoot + "/assets/objects/ketchup_bottle/object.json", true, true);
+}
 void BM_Render640_HandKetchup_ColourOnly(benchmark::State& s) {
   Render(s, kRoot + "/assets/objects/ketchup_bottle/object.json", false);
 }
@@ -56,6 +76,9 @@ void BM_Render640_HandYcbMustard16k_ColourDepthLabels(benchmark::State& s) {
   Render(s, kRoot + "/../shared/assets/objects/ycb/mustard_bottle.urdf", true);
 }
 BENCHMARK(BM_Render640_HandKetchup_ColourDepthLabels)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Render640_HandKetchup_ColourDepthLabels_DrawnRegion)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_Render640_HandKetchup_ColourOnly)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Render640_HandYcbMustard16k_ColourDepthLabels)
     ->Unit(benchmark::kMillisecond)
@@ -129,12 +152,11 @@ BENCHMARK(BM_TagDetectorConstruction)->Unit(benchmark::kMillisecond)->UseRealTim
 
 // The extracted-feature step of jtf at 640x480: virtual render (colour, depth, labels) and the
 // five matching steps against a camera image of the object 4 mm / 1.5 deg away.
-#include "inhand/features/extracted.hpp"
 
 namespace inhand {
 namespace {
 
-void BM_ExtractedFeatureStep640(benchmark::State& state) {
+void FeatureStep(benchmark::State& state, bool region) {
   RenderScene s(kRoot + "/assets/objects/ketchup_bottle/object.json");
   RenderOutput real;
   s.renderer.Render(s.scene, real, false);
@@ -147,15 +169,28 @@ void BM_ExtractedFeatureStep640(benchmark::State& state) {
   std::vector<std::uint8_t> mask;
   int inliers = 0;
   for (auto _ : state) {
+    // As the tracker: drawn and matched only around the object's bounds (SearchRegion).
+    PixelRect search;
+    if (region) {
+      const Eigen::AlignedBox2d box = s.ObjectBox(shifted);
+      search = SearchRegion(box, FeatureParams(), 640, 480);
+      shifted.region = DrawnRegion(box, FeatureParams(), 640, 480);
+    }
     s.renderer.Render(shifted, virt, true);
     mask.resize(virt.label.size());
     for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = virt.label[i] == kObjectLabel;
-    inliers = MatchFeatures(real.colour, virt.colour, &mask, FeatureParams(), nullptr, false)
+    inliers = MatchFeatures(real.colour, virt.colour, &mask, FeatureParams(), nullptr, false,
+                            search)
                   .num_inliers();  // as the tracker: no debug-only camera corners
   }
   state.counters["inliers"] = inliers;
+  state.counters["drawn_px"] = region ? shifted.region.width() * shifted.region.height() : 0;
 }
+void BM_ExtractedFeatureStep640(benchmark::State& state) { FeatureStep(state, true); }
+// The same over the whole images (before the region): for the ratio.
+void BM_ExtractedFeatureStep640_WholeImage(benchmark::State& state) { FeatureStep(state, false); }
 BENCHMARK(BM_ExtractedFeatureStep640)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ExtractedFeatureStep640_WholeImage)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The matching alone with step 0, the shift of the whole object searched within 90 px (the
 // tracker's first frames, and a lost object's search): the virtual image about 25 px off.

@@ -23,17 +23,72 @@ struct Pair {
   std::vector<int> meshes = UploadObject(renderer, object);
   Intrinsics K = IntrinsicsFromFov(640, 480, 40);
   Transform T_PC = LookAt(Vec3(0.02, -0.32, 0.16), Vec3(0, 0, 0.09), Vec3::UnitZ());
-  RenderOutput Render(const Transform& T_PO) {
+  RenderOutput Render(const Transform& T_PO, const PixelRect& region = {}) {
     Scene s;
     s.K = K;
     s.T_PC = T_PC;
     s.background = Vec3(0.45, 0.5, 0.55);
+    s.region = region;
     AddObject(s, meshes, T_PO);
     RenderOutput out;
     renderer.Render(s, out, true);
     return out;
   }
 };
+
+// The tracker draws the virtual view only around the object (DrawnRegion) and matches only as
+// far around it as the search reaches (SearchRegion). On a plain background, where every edge
+// lies well inside, the matches are those of the whole images, to the bit: the same pixels, the
+// same inliers, the same similarity. The view drawn around the object has the whole view's
+// pixels there and the background elsewhere.
+TEST(ExtractedFeatures, ARegionAroundTheObjectMatchesAsTheWholeImages) {
+  Pair p;
+  const Transform T_true = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0, 0, 0.15)));
+  const Transform T_est =
+      MakeTransform(Vec3(0.004, -0.002, 0.003), ExpSO3(Vec3(0.01, -0.015, 0.02))) * T_true;
+  const Aabb b = p.object.Bounds();
+  Eigen::AlignedBox2d box;
+  for (int i = 0; i < 8; ++i)
+    box.extend(p.K.Project(p.T_PC.inverse() * T_est *
+                           Vec3(i & 1 ? b.max.x() : b.min.x(), i & 2 ? b.max.y() : b.min.y(),
+                                i & 4 ? b.max.z() : b.min.z())));
+  const FeatureParams params;
+  const PixelRect search = SearchRegion(box, params, 640, 480);
+  const PixelRect drawn = DrawnRegion(box, params, 640, 480);
+  ASSERT_FALSE(search.empty());
+  EXPECT_LT(search.width() * search.height(), 640 * 480 / 2);
+  EXPECT_TRUE(search.x0 <= drawn.x0 && search.y0 <= drawn.y0 && drawn.x1 <= search.x1 &&
+              drawn.y1 <= search.y1);
+  const RenderOutput real = p.Render(T_true);
+  const RenderOutput whole = p.Render(T_est);
+  const RenderOutput part = p.Render(T_est, drawn);
+  const auto mask_of = [](const RenderOutput& v) {
+    std::vector<std::uint8_t> mask(v.label.size());
+    for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = v.label[i] == kObjectLabel;
+    return mask;
+  };
+  const std::vector<std::uint8_t> mask_whole = mask_of(whole), mask_part = mask_of(part);
+  EXPECT_EQ(mask_whole, mask_part);  // the object lies within the drawn region
+  const MatchResult a = MatchFeatures(real.colour, whole.colour, &mask_whole, params);
+  const MatchResult c =
+      MatchFeatures(real.colour, part.colour, &mask_part, params, nullptr, true, search);
+  ASSERT_GE(a.num_inliers(), 6);
+  ASSERT_EQ(a.matches.size(), c.matches.size());
+  for (std::size_t i = 0; i < a.matches.size(); ++i) {
+    EXPECT_EQ(a.matches[i].virtual_px, c.matches[i].virtual_px) << i;
+    EXPECT_EQ(a.matches[i].real_px, c.matches[i].real_px) << i;
+    EXPECT_EQ(a.matches[i].inlier, c.matches[i].inlier) << i;
+  }
+  EXPECT_LT((a.debug.similarity - c.debug.similarity).norm(), 1e-9);
+  EXPECT_EQ(a.debug.virtual_edges.data, c.debug.virtual_edges.data);
+  // The camera's edges are the whole image's within the region, zero outside it.
+  for (int y = 0; y < 480; ++y)
+    for (int x = 0; x < 640; ++x) {
+      const bool inside = x >= search.x0 && x < search.x1 && y >= search.y0 && y < search.y1;
+      ASSERT_EQ(c.debug.real_edges.pixel(x, y)[0], inside ? a.debug.real_edges.pixel(x, y)[0] : 0)
+          << x << "," << y;
+    }
+}
 
 TEST(ExtractedFeatures, MatchingRecoversAKnownPoseOffsetAndTheUpdateRemovesIt) {
   Pair p;

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "inhand/core/image.hpp"
 #include "inhand/core/so3.hpp"
 
@@ -29,7 +31,8 @@ struct FeatureParams {
   double blur_sigma = 1.0;  // [px] Gaussian blur before Canny (noise)
   int harris_block = 5;     // neighbourhood of the Harris matrix [px]
   double harris_k = 0.04;
-  double harris_relative = 0.05;      // keep responses above this share of the image's maximum
+  double harris_relative = 0.05;      // keep responses above this share of the maximum (with an
+                                      // object mask: the maximum near the object)
   int max_corners = 40;               // strongest virtual corners kept
   double min_corner_distance = 10.0;  // [px] between kept corners
   int occluder_clearance = 8;         // [px] virtual corners this close to an occluder (a finger)
@@ -90,15 +93,36 @@ struct MatchResult {
 };
 
 // `object_mask` (optional, virtual image size, non-zero on the object's visible pixels) limits
-// the virtual corners to the object; `occluder_mask` (optional, same size, non-zero on what
-// occludes it: the hand) rejects the corners within occluder_clearance of it. Images are RGB or
-// grey of the same size.
-// `camera_corners` false leaves debug.real_corners empty: the matching does not use them (the
-// tracker skips them; EdgeCorners computes them for a debug view).
+// the virtual corners to the object, and the virtual edges to its mask's box grown by a piece
+// (piece_radius + 3 px: all that the steps read of them); `occluder_mask` (optional, same size,
+// non-zero on what occludes it: the hand) rejects the corners within occluder_clearance of it.
+// Images are RGB or grey of the same size. `camera_corners` false leaves debug.real_corners empty:
+// the matching does not use them (the tracker skips them; EdgeCorners computes them for a debug
+// view). `region` (not empty): only those pixels of both images are read (clipped to the images),
+// as if they were the whole images: edges, corners, pieces and votes are found there, and reported
+// in the whole image's pixels (the debug edge images are zero outside it). The caller keeps the
+// object and the search around it inside, and the filters' borders (blur, Sobel, Harris block)
+// away from what matters: an edge that leaves the region and comes back is not followed.
 MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
                           const std::vector<std::uint8_t>* object_mask, const FeatureParams& params,
                           const std::vector<std::uint8_t>* occluder_mask = nullptr,
-                          bool camera_corners = true);
+                          bool camera_corners = true, const PixelRect& region = {});
+
+// The region MatchFeatures with `params` needs around an object whose image lies within
+// `object` [px]: that box grown by a corner's piece and how far it is searched for (with a
+// whole-object shift first, step 0: the shift, the local search around it and the chamfer's
+// truncation), and by kRegionBorder for the blur, Sobel and Harris windows' borders; clipped to
+// the width x height image. Empty (the whole image) if `object` is not finite or the region
+// misses the image.
+inline constexpr int kRegionBorder = 8;  // [px]
+PixelRect SearchRegion(const Eigen::AlignedBox2d& object, const FeatureParams& params, int width,
+                       int height);
+
+// What of the virtual image MatchFeatures reads with an object mask, for an object whose image
+// lies within `object`: the box grown by a corner's piece, the mask's growth (3 px) and
+// kRegionBorder. A view drawn only there (Scene::region) matches as a whole one does.
+PixelRect DrawnRegion(const Eigen::AlignedBox2d& object, const FeatureParams& params, int width,
+                      int height);
 
 // Harris corners of an edge image (grey, 255 on edges) as MatchFeatures finds them.
 std::vector<Vec2> EdgeCorners(const Image8& edges, const FeatureParams& params);
