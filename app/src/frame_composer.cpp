@@ -206,12 +206,13 @@ Image8 FrameComposer::Compose(const PictureState& st, const OverlayLayers& layer
   const Image8 annotated = painter_->Paint(of, layers);
 
   // The virtual view: the scene as the last set believes it, from the camera; when it matched
-  // features on this frame, the very image it matched them against.
+  // features on this frame, the very image it matched them against (drawn only around the
+  // object: VisualStep::region).
   const std::size_t last = p_.sets().size() - 1;
   RenderOutput virtual_out;
   const Image8* middle = &st.matched_view;
-  std::string virtual_caption =
-      "virtual view " + p_.sets()[last].name + " matched (estimate before the update)";
+  std::string virtual_caption = "virtual view " + p_.sets()[last].name +
+                                " matched (before the update; drawn near the object)";
   if (middle->empty()) {
     renderer_.Render(CameraScene(hand_meshes_, st.link_poses, object_meshes_,
                                  st.sets.back().record.T_PO, frame.T_PC, K, Vec3(0.12, 0.12, 0.14)),

@@ -109,6 +109,15 @@ MatchPictures DrawMatchPictures(const Image8& camera_image, const VisualStep& fs
                 rejected ? cv::Scalar(255, 80, 80) : cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
   cv::Mat matches = camera.clone();
+  // The region the step read (the virtual view is drawn only around the object, within it).
+  if (!fs.region.empty()) {
+    const cv::Rect box(fs.region.x0, fs.region.y0, fs.region.width(), fs.region.height());
+    for (cv::Mat* m : {&matches, &real_edges}) {
+      cv::rectangle(*m, box, cv::Scalar(0, 200, 255), 1);
+      cv::putText(*m, "searched", box.tl() + cv::Point(3, 24), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                  cv::Scalar(0, 200, 255), 1, cv::LINE_AA);
+    }
+  }
   for (const FeatureMatch& m : r.matches) {
     const cv::Scalar col = m.inlier ? cv::Scalar(40, 230, 40) : cv::Scalar(230, 40, 40);
     cv::arrowedLine(matches, P(m.virtual_px), P(m.real_px), col, 1, cv::LINE_AA, 0, 0.3);

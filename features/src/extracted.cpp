@@ -118,9 +118,23 @@ EdgeData EdgesWithin(const Image8& im, const cv::Rect& keep, const FeatureParams
   return e;
 }
 
+// The Harris response of a clean right-angle corner of one-pixel edges (two arms 28 px long),
+// with the parameters' window and k.
+double CornerReference(const FeatureParams& p) {
+  cv::Mat f = cv::Mat::zeros(64, 64, CV_32F), response;
+  f(cv::Rect(32, 32, 28, 1)).setTo(1.0f);
+  f(cv::Rect(32, 32, 1, 28)).setTo(1.0f);
+  cv::cornerHarris(f, response, p.harris_block, 3, p.harris_k);
+  double max_r = 0.0;
+  cv::minMaxLoc(response, nullptr, &max_r);
+  return max_r;
+}
+
 // Harris corners of an edge image: local maxima above a share of the maximum, strongest first,
-// at least min_distance apart. `keep` filters candidates (virtual: on the object). Only edges
-// within `area` count (none elsewhere: the response is zero farther than the Harris window).
+// at least min_distance apart. The maximum is at least a clean corner's (CornerReference): a
+// view whose edges have only weak corners (a thin pen seen alone) does not lower the bar. `keep`
+// filters candidates (virtual: on the object). Only edges within `area` count (none elsewhere: the
+// response is zero farther than the Harris window).
 std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p,
                                 const std::vector<std::uint8_t>* mask, std::vector<Vec2>* rejected,
                                 cv::Rect area = cv::Rect()) {
@@ -135,6 +149,7 @@ std::vector<Vec2> HarrisCorners(const cv::Mat& edges, const FeatureParams& p,
   double max_r = 0.0;
   cv::minMaxLoc(response, nullptr, &max_r);
   if (!(max_r > 0)) return {};
+  max_r = std::max(max_r, CornerReference(p));
   cv::Mat dilated;
   cv::dilate(response, dilated, cv::Mat::ones(5, 5, CV_8U));
   struct Candidate {

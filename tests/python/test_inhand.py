@@ -336,10 +336,12 @@ class WriterFromPython(unittest.TestCase):
         rows.sort(key=lambda r: ("j", "jt", "jta", "jtf").index(r["set"]))
         self.assertEqual(len(rows), len(original))
         # Joints and torques are byte-identical: j and jt estimate the same poses. The camera
-        # poses pass a 4x4 matrix, so their quaternions may move in the last digit: the vision
-        # sets agree within a micrometre.
+        # poses pass a 4x4 matrix, so their quaternions may move in the last digit, and a last
+        # digit can tip one of the matching's discrete choices (a corner kept, an inlier): the
+        # vision sets agree within 1e-4 (m, and in each quaternion component; measured: 1e-6
+        # before features were matched only around the object, 1.1e-5 since).
         for a, b in zip(rows, original):
-            bound = 0.0 if a["set"] in ("j", "jt") else 1e-6
+            bound = 0.0 if a["set"] in ("j", "jt") else 1e-4
             for c in ("px", "py", "pz", "qw", "qx", "qy", "qz"):
                 self.assertLessEqual(abs(float(a[c]) - float(b[c])), bound, (a["set"], a["t"], c))
 

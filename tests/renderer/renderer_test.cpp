@@ -183,16 +183,26 @@ TEST(Renderer, DepthIsMetricAlongTheOpticalAxis) {
   EXPECT_NEAR(out.depth_at(static_cast<int>(centre.x()), static_cast<int>(centre.y())), 0.48, 1e-5);
 }
 
-TEST(Renderer, LabelImageIdentifiesTheLinks) {
+// Our hand, its joints at zero, seen by a camera 0.35 m away facing the palm.
+struct FacingThePalm {
   Renderer& r = SharedRenderer();
-  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
-  const HandMeshes meshes = UploadHand(r, hand);
-  KinematicsData kin(hand);
-  kin.Update(hand, Eigen::VectorXd::Zero(hand.num_q()));
+  HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
+  KinematicsData kin{hand};
   Scene scene;
-  scene.K = Camera(320, 320);
-  scene.T_PC = LookAt(Vec3(0, 0.07, 0.35), Vec3(0, 0.07, 0), Vec3::UnitY());  // facing the palm
-  AddHand(scene, meshes, kin.link_poses());
+  FacingThePalm(int width, int height) {
+    kin.Update(hand, Eigen::VectorXd::Zero(hand.num_q()));
+    scene.K = Camera(width, height);
+    scene.T_PC = LookAt(Vec3(0, 0.07, 0.35), Vec3(0, 0.07, 0), Vec3::UnitY());
+    AddHand(scene, UploadHand(r, hand), kin.link_poses());
+  }
+};
+
+TEST(Renderer, LabelImageIdentifiesTheLinks) {
+  FacingThePalm f(320, 320);
+  Renderer& r = f.r;
+  const HandModel& hand = f.hand;
+  const KinematicsData& kin = f.kin;
+  const Scene& scene = f.scene;
   RenderOutput out;
   r.Render(scene, out);
   const Transform T_CP = scene.T_PC.inverse();
@@ -215,16 +225,10 @@ TEST(Renderer, LabelImageIdentifiesTheLinks) {
 // label 0), also when the same output held a whole render before. A region partly outside the
 // image is clipped; one wholly outside leaves the background everywhere.
 TEST(Renderer, ARegionIsTheWholeRendersPixelsAndTheBackgroundElsewhere) {
-  Renderer& r = SharedRenderer();
-  const HandModel hand = LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"));
-  const HandMeshes meshes = UploadHand(r, hand);
-  KinematicsData kin(hand);
-  kin.Update(hand, Eigen::VectorXd::Zero(hand.num_q()));
-  Scene scene;
-  scene.K = Camera(320, 240);
-  scene.T_PC = LookAt(Vec3(0, 0.07, 0.35), Vec3(0, 0.07, 0), Vec3::UnitY());
+  FacingThePalm f(320, 240);
+  Renderer& r = f.r;
+  Scene& scene = f.scene;
   scene.background = Vec3(0.5, 0.25, 0.75);
-  AddHand(scene, meshes, kin.link_poses());
   RenderOutput whole, part;
   r.Render(scene, whole);
   r.Render(scene, part);  // the output held a whole render: the region must clear the rest

@@ -58,8 +58,6 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
       return;
     }
   }
-  // The virtual image: the scene as this filter believes it (hand at its biased joints).
-  RenderAt(f, f.T_PO(), T_PC, K, step.virtual_view);
   // Search as far as the estimate is uncertain: 3σ of the pixel of the object's centre (its
   // position, and its orientation at the object's radius), within [search_radius,
   // max_search_radius], and that far until a frame has matched well. That first match must bridge
@@ -94,8 +92,18 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
                                // not 15, and was no more accurate overall
   step.search_radius = radius;
   step.relocalized = 0.0;
-  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_,
-                             false);  // no debug-only camera corners
+  // Lost (below): this frame also searches the whole object as at the start.
+  const bool lost = matched_well_ && poor_frames_ >= kLostFrames && poor_frames_ % kLostFrames == 0;
+  FeatureParams global = params_;
+  global.global_search_radius = params_.max_search_radius;
+  // The virtual image: the scene as this filter believes it (hand at its biased joints), drawn
+  // only around the object (what the matching reads of it) and matched as far around it as this
+  // frame's searches reach.
+  const Eigen::AlignedBox2d box = ImageBox(f.T_PO(), T_PC, K);
+  step.region = SearchRegion(box, lost ? global : p, K.width, K.height);
+  RenderAt(f, f.T_PO(), T_PC, K, DrawnRegion(box, p, K.width, K.height), step.virtual_view);
+  step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false,
+                             step.region);  // no debug-only camera corners
   // A whole-object shift that walks the estimate off the fingers pressing on the object
   // (AdmitsShift) is refused: the corners are searched locally.
   if (hand_check && p.global_search_radius > 0 &&
@@ -105,8 +113,8 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
     p.global_search_radius = 0;
     p.search_radius = params_.search_radius;
     step.search_radius = params_.search_radius;
-    step.match =
-        MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_, false);
+    step.match = MatchFeatures(image, step.virtual_view.colour, &object_mask_, p, &hand_mask_,
+                               false, step.region);
   }
   Inliers(step.match, T_PC, K, f, step.virtual_view, step.used_match, out);
   const bool well = static_cast<int>(out.size()) >= kWellMatched;
@@ -121,11 +129,9 @@ void ExtractedFeatures::Measure(const Image8& image, const Transform& T_PC, cons
   // added to the position's σ (Filter::WidenPose) so that the features can move it back.
   // Otherwise the frame's own search stands (a heavily occluded object matches poorly for
   // seconds without being lost).
-  if (matched_well_ && poor_frames_ >= kLostFrames && poor_frames_ % kLostFrames == 0) {
-    FeatureParams global = params_;
-    global.global_search_radius = params_.max_search_radius;
-    MatchResult again =
-        MatchFeatures(image, step.virtual_view.colour, &object_mask_, global, &hand_mask_, false);
+  if (lost) {
+    MatchResult again = MatchFeatures(image, step.virtual_view.colour, &object_mask_, global,
+                                      &hand_mask_, false, step.region);
     const MatchDebug& d = again.debug;
     const bool admitted =
         !hand_check ||
@@ -213,10 +219,11 @@ void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC,
 }
 
 void ExtractedFeatures::RenderAt(const Filter& f, const Transform& T_PO, const Transform& T_PC,
-                                 const Intrinsics& K, RenderOutput& view) {
-  renderer_->Render(CameraScene(hand_meshes_, f.kinematics().link_poses(), object_meshes_, T_PO,
-                                T_PC, K, Vec3(0.5, 0.5, 0.5)),
-                    view, true);
+                                 const Intrinsics& K, const PixelRect& region, RenderOutput& view) {
+  Scene scene = CameraScene(hand_meshes_, f.kinematics().link_poses(), object_meshes_, T_PO, T_PC,
+                            K, Vec3(0.5, 0.5, 0.5));
+  scene.region = region;
+  renderer_->Render(scene, view, true);
   const std::vector<std::uint16_t>& label = view.label;
   object_mask_.resize(label.size());
   hand_mask_.resize(label.size());
@@ -224,6 +231,25 @@ void ExtractedFeatures::RenderAt(const Filter& f, const Transform& T_PO, const T
     object_mask_[i] = label[i] == kObjectLabel;
     hand_mask_[i] = label[i] >= kHandLabelBase && label[i] < kExtraLabelBase;
   }
+}
+
+// The image of the object's bounds at T_PO, with and without the lens's distortion; empty when
+// the object reaches behind the camera (then the whole image is drawn and searched).
+Eigen::AlignedBox2d ExtractedFeatures::ImageBox(const Transform& T_PO, const Transform& T_PC,
+                                                const Intrinsics& K) const {
+  const Aabb b = object_.Bounds();
+  Eigen::AlignedBox2d box;
+  if (b.Empty()) return box;
+  const Transform T_CO = T_PC.inverse() * T_PO;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 X = T_CO * Vec3(i & 1 ? b.max.x() : b.min.x(), i & 2 ? b.max.y() : b.min.y(),
+                               i & 4 ? b.max.z() : b.min.z());
+    if (!(X.z() > 1e-3)) return Eigen::AlignedBox2d();
+    const Vec2 u = K.Project(X);
+    box.extend(u);
+    box.extend(K.Distort(u));
+  }
+  return box;
 }
 
 // A shift of the object's image by s px at depth z is a move of z s / f in the image plane.
@@ -302,9 +328,12 @@ bool ExtractedFeatures::Recover(const Image8& image, const Transform& T_PC, cons
     if (!(excess == 0.0 || excess < 0.5 * excess_now) ||
         (hypotheses[i].translation() - f.position()).norm() > max_jump)
       continue;
-    RenderAt(f, hypotheses[i], T_PC, K, hypothesis_view_);
-    MatchResult m =
-        MatchFeatures(image, hypothesis_view_.colour, &object_mask_, around, &hand_mask_, false);
+    const Eigen::AlignedBox2d box = ImageBox(hypotheses[i], T_PC, K);
+    const PixelRect region = SearchRegion(box, around, K.width, K.height);
+    RenderAt(f, hypotheses[i], T_PC, K, DrawnRegion(box, around, K.width, K.height),
+             hypothesis_view_);
+    MatchResult m = MatchFeatures(image, hypothesis_view_.colour, &object_mask_, around,
+                                  &hand_mask_, false, region);
     const double cost = std::isfinite(m.debug.global_cost) ? m.debug.global_cost
                                                            : std::numeric_limits<double>::max();
     const std::pair<bool, double> key{excess > 0.0, excess > 0.0 ? excess : cost};
@@ -312,6 +341,7 @@ bool ExtractedFeatures::Recover(const Image8& image, const Transform& T_PC, cons
       best = static_cast<int>(i), best_key = key;
       best_match = std::move(m);
       std::swap(step.virtual_view, hypothesis_view_);
+      step.region = region;
     }
   }
   if (best < 0) return false;

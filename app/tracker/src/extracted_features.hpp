@@ -55,9 +55,12 @@ class ExtractedFeatures final : public VisualSource {
                std::vector<VisualFeature>& out) const;
   static bool OnOutline(const RenderOutput& view, int x, int y);
   // Renders the scene with the object at T_PO (the hand at the filter's joints) into `view`,
-  // and the object's and the hand's masks from it.
+  // within `region` (empty: the whole image), and the object's and the hand's masks from it.
   void RenderAt(const Filter& f, const Transform& T_PO, const Transform& T_PC, const Intrinsics& K,
-                RenderOutput& view);
+                const PixelRect& region, RenderOutput& view);
+  // The image of the object's bounds at T_PO (empty if it reaches behind the camera).
+  Eigen::AlignedBox2d ImageBox(const Transform& T_PO, const Transform& T_PC,
+                               const Intrinsics& K) const;
   // The pose of the object moved by a shift of `shift` px of its image at depth `depth`.
   static Transform Shifted(const Transform& T_PO, const Vec2& shift, double depth,
                            const Transform& T_PC, const Intrinsics& K);

@@ -32,7 +32,8 @@ struct FeatureParams {
   int harris_block = 5;     // neighbourhood of the Harris matrix [px]
   double harris_k = 0.04;
   double harris_relative = 0.05;      // keep responses above this share of the maximum (with an
-                                      // object mask: the maximum near the object)
+                                      // object mask: the maximum near the object), or of a clean
+                                      // right-angle corner's response if that is larger
   int max_corners = 40;               // strongest virtual corners kept
   double min_corner_distance = 10.0;  // [px] between kept corners
   int occluder_clearance = 8;         // [px] virtual corners this close to an occluder (a finger)

@@ -95,11 +95,13 @@ struct VisualStep {
   // Feature sets: the virtual image at the estimate, the matches with every stage's output,
   // and for each feature offered to the update its match and pixel residual before and after.
   bool has_features = false;
-  RenderOutput virtual_view;
+  RenderOutput virtual_view;  // drawn within `region` only: the background elsewhere
   MatchResult match;
-  int search_radius = 0;        // [px] how far the object was searched (widened while
-                                // uncertain; beyond FeatureParams::search_radius, match.debug
-                                // has the global shift)
+  PixelRect region;       // the pixels matched (and drawn): around the object, as far as its search
+                          // reaches; empty: the whole image
+  int search_radius = 0;  // [px] how far the object was searched (widened while
+                          // uncertain; beyond FeatureParams::search_radius, match.debug
+                          // has the global shift)
   double relocalized = 0.0;     // [m] the object, lost for frames, was found this far from
                                 // the estimate. Extracted features: the σ added to its
                                 // position before the update; tags: the fit of the tags'
