@@ -532,7 +532,12 @@ MatchResult MatchFeatures(const Image8& real, const Image8& virtual_image,
   if (r.width() == W && r.height() == H)
     return MatchWhole(real, virtual_image, object_mask, p, occluder_mask, camera_corners,
                       Vec2::Zero());
-  if (r.empty()) return MatchResult();
+  if (r.empty()) {  // a region outside the images: nothing read, nothing found
+    MatchResult none;
+    none.debug.real_edges = Image8(W, H, 1);
+    none.debug.virtual_edges = Image8(W, H, 1);
+    return none;
+  }
   INHAND_CHECK(!object_mask || object_mask->size() == std::size_t(W) * H,
                "object mask of another size");
   INHAND_CHECK(!occluder_mask || occluder_mask->size() == std::size_t(W) * H,

@@ -81,6 +81,14 @@ TEST(ExtractedFeatures, ARegionAroundTheObjectMatchesAsTheWholeImages) {
   }
   EXPECT_LT((a.debug.similarity - c.debug.similarity).norm(), 1e-9);
   EXPECT_EQ(a.debug.virtual_edges.data, c.debug.virtual_edges.data);
+  // A region wholly outside the images reads nothing and finds nothing, with edge images of the
+  // images' size (the matching views draw them).
+  const MatchResult outside = MatchFeatures(real.colour, part.colour, &mask_part, params, nullptr,
+                                            true, PixelRect{700, 0, 800, 100});
+  EXPECT_TRUE(outside.matches.empty());
+  EXPECT_TRUE(outside.debug.virtual_corners.empty());
+  EXPECT_EQ(outside.debug.real_edges.width, 640);
+  EXPECT_EQ(outside.debug.virtual_edges.height, 480);
   // The camera's edges are the whole image's within the region, zero outside it.
   for (int y = 0; y < 480; ++y)
     for (int x = 0; x < 640; ++x) {
