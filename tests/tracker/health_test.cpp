@@ -27,6 +27,7 @@ struct Fault {
   double from = 1e9, to = 1e9;
   Vec3 camera_shift = Vec3::Zero();  // [m] added to the camera position (palm frame)
   bool freeze = false;               // every image from `from` on is the one before it
+  bool cover = false;                // every image from `from` on is a plain grey frame, noisy
   int joint = -1;                    // configuration entry offset by joint_offset [rad]
   double joint_offset = 0.0;
   double torque_scale = 1.0;  // every joint torque multiplied by this
@@ -75,7 +76,17 @@ Timeline Replay(const Recording& r, const std::string& set, const Fault& fault, 
         if (frozen < 0) frozen = std::max(0, image - 1);
         image = frozen;
       }
-      tracker->AddImage(frames[next].t, r.images[static_cast<std::size_t>(image)], T_PC,
+      const Image8& pixels = r.images[static_cast<std::size_t>(image)];
+      Image8 grey;
+      if (fault.cover && fault.Active(frames[next].t)) {
+        grey = pixels;  // grey with a sensor's noise (identical frames would be frozen ones)
+        std::uint32_t state = 12345u + static_cast<std::uint32_t>(next);
+        for (std::uint8_t& v : grey.data) {
+          state = state * 1664525u + 1013904223u;
+          v = static_cast<std::uint8_t>(126 + (state >> 30));
+        }
+      }
+      tracker->AddImage(frames[next].t, grey.data.empty() ? pixels : grey, T_PC,
                         *r.session.info().camera);
       ++next;
     }
@@ -199,6 +210,28 @@ TEST(HealthMonitor, EachConditionDecidesItsStateAndTheWorstWins) {
   EXPECT_EQ(m.health().cause, HealthCause::kSlipping);
   m.OnSample(t + p.slip_hold + 0.01, FilterTrace(), kNarrow, kNarrow);
   EXPECT_EQ(m.health().state, HealthState::kOk);
+  // Vision blind: a full window whose images fused fewer than vision_min_used together; not
+  // before the window is full, and ok again once an image fuses enough.
+  t += p.slip_hold + 0.02;
+  for (int i = 0; i < p.vision_window; ++i, t += 0.02) {
+    m.OnImageAdded(t, 250 + static_cast<unsigned long long>(i));
+    m.OnImage({t, 2, 1, false, false, 0.0});
+    m.OnSample(t, FilterTrace(), kNarrow, kNarrow);
+    if (i < p.vision_window - 1) {
+      EXPECT_NE(m.health().cause, HealthCause::kVisionBlind) << i;  // 10 fused remain in it
+    }
+  }
+  EXPECT_EQ(m.health().state, HealthState::kUncertain);
+  EXPECT_EQ(m.health().cause, HealthCause::kVisionBlind);
+  EXPECT_DOUBLE_EQ(m.health().value, p.vision_window);
+  m.OnImageAdded(t, 260);
+  m.OnImage({t, 8, 4, false, false, 0.0});  // 4 + 4 × 1 fused: enough
+  m.OnSample(t, FilterTrace(), kNarrow, kNarrow);
+  EXPECT_EQ(m.health().state, HealthState::kOk);
+  for (int i = 0; i < p.vision_window; ++i, t += 0.02) {
+    m.OnImageAdded(t, 270 + static_cast<unsigned long long>(i));
+    m.OnImage({t, 10, 10, false, false, 0.0});
+  }
   // Tags elsewhere: inconsistent; found again: uncertain for relocalized_hold.
   t += p.slip_hold + 0.02;
   m.OnImageAdded(t, 300);
@@ -217,6 +250,25 @@ TEST(HealthMonitor, EachConditionDecidesItsStateAndTheWorstWins) {
   EXPECT_EQ(m.health().state, HealthState::kOk);
 }
 
+TEST(HealthMonitor, ASetWithoutImagesIsNeverBlindAndZeroTurnsTheCheckOff) {
+  HealthParams p;
+  HealthMonitor m(p);
+  m.Reset(0.0);
+  for (double t = 0.0; t < 2.0; t += 0.01) m.OnSample(t, FilterTrace(), kNarrow, kNarrow);
+  EXPECT_EQ(m.health().state, HealthState::kOk);
+  p.vision_min_used = 0;
+  HealthMonitor off(p);
+  off.Reset(0.0);
+  for (int i = 0; i < 2 * p.vision_window; ++i) {
+    off.OnImageAdded(0.1 * i, 1000 + static_cast<unsigned long long>(i));
+    off.OnImage({0.1 * i, 0, 0, false, false, 0.0});
+    off.OnSample(0.1 * i, FilterTrace(), kNarrow, kNarrow);
+  }
+  EXPECT_EQ(off.health().state, HealthState::kOk);
+  p.vision_min_used = -1;
+  EXPECT_THROW(p.Validate(), InputError);
+}
+
 TEST(HealthMonitor, MessagesNameTheLinkAndTheFigure) {
   HandModel hand;
   hand.links.resize(3);
@@ -230,6 +282,17 @@ TEST(HealthMonitor, MessagesNameTheLinkAndTheFigure) {
   EXPECT_EQ(HealthMessage(h, hand),
             "inconsistent since 1.20 s: thumb_tip presses but the object is 23.1 mm from it");
   EXPECT_STREQ(HealthCauseName(HealthCause::kVisionDisagrees), "vision_disagrees");
+  EXPECT_STREQ(HealthCauseName(HealthCause::kVisionBlind), "vision_blind");
+  h.state = HealthState::kUncertain;
+  h.cause = HealthCause::kVisionBlind;
+  h.value = 3;
+  EXPECT_EQ(HealthMessage(h, hand),
+            "uncertain since 1.20 s: the last images fused 3 points of the object, too few to "
+            "check the estimate");
+  h.value = 1;
+  EXPECT_EQ(HealthMessage(h, hand),
+            "uncertain since 1.20 s: the last images fused 1 point of the object, too few to "
+            "check the estimate");
   EXPECT_STREQ(HealthStateName(HealthState::kLost), "lost");
   HealthParams bad;
   bad.press_gap = 0.0;
@@ -413,6 +476,25 @@ TEST(HealthFaults, AFrozenImageStreamIsDeclared) {
         f.from + 0.5)
         << set << "\n"
         << Describe(tl, r.models.hand);
+  }
+}
+
+// A hand over the lens: the images keep coming, but show nothing. Each vision set says that its
+// images no longer check the estimate (the extracted features first say they are lost), and no
+// set calls the estimate wrong for it.
+TEST(HealthFaults, ACoveredCameraIsDeclaredBlind) {
+  const Recording& r = Recording::Get();
+  Fault f{2.0, 1e9};
+  f.cover = true;
+  for (const std::string set : {"jta", "jtf"}) {
+    const Timeline tl = Replay(r, set, f);
+    const auto blind = [](const Health& h) {
+      return h.cause == HealthCause::kVisionBlind || h.cause == HealthCause::kFeaturesLost;
+    };
+    EXPECT_EQ(tl.First(0.0, blind), tl.First(f.from, blind)) << set << ": blind before the fault";
+    EXPECT_LE(tl.First(f.from, blind), f.from + 0.5) << set << "\n" << Describe(tl, r.models.hand);
+    EXPECT_EQ(tl.First(f.from, Alarm), INFINITY) << set << "\n" << Describe(tl, r.models.hand);
+    EXPECT_EQ(tl.health.back().state, HealthState::kUncertain) << set;
   }
 }
 

@@ -75,6 +75,7 @@ const std::vector<param_table::Field<HealthParams>>& HealthFields() {
       Integer("vision_window", &H::vision_window),
       Integer("vision_min_offered", &H::vision_min_offered),
       Number("vision_gated_share", &H::vision_gated_share),
+      Integer("vision_min_used", &H::vision_min_used),
       Number("images_stale", &H::images_stale),
       Integer("images_frozen", &H::images_frozen),
       Number("relocalized_hold", &H::relocalized_hold),

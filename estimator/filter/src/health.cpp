@@ -42,6 +42,8 @@ const char* HealthCauseName(HealthCause cause) {
       return "images_frozen";
     case HealthCause::kVisionDisagrees:
       return "vision_disagrees";
+    case HealthCause::kVisionBlind:
+      return "vision_blind";
     case HealthCause::kTagsElsewhere:
       return "tags_elsewhere";
     case HealthCause::kPenetration:
@@ -98,6 +100,11 @@ std::string HealthMessage(const Health& h, const HandModel& hand) {
       std::snprintf(what, sizeof what, "the estimate's gate refuses %.0f%% of the image features",
                     h.value * 100);
       break;
+    case HealthCause::kVisionBlind:
+      std::snprintf(what, sizeof what,
+                    "the last images fused %d point%s of the object, too few to check the estimate",
+                    static_cast<int>(h.value), static_cast<int>(h.value) == 1 ? "" : "s");
+      break;
     case HealthCause::kTagsElsewhere:
       std::snprintf(what, sizeof what, "the tags see the object elsewhere");
       break;
@@ -146,10 +153,12 @@ void HealthParams::Validate(const std::string& source) const {
     if (!(v >= 0.0 && v <= 1e4))
       throw InputError(source + ": parameter 'health." + name + "' is " + std::to_string(v) +
                        ", expected in [0, 1e4] s");
-  if (vision_window < 1 || vision_window > 32 || vision_min_offered < 1 || images_frozen < 2)
+  if (vision_window < 1 || vision_window > 32 || vision_min_offered < 1 || vision_min_used < 0 ||
+      images_frozen < 2)
     throw InputError(source +
                      ": parameter 'health.vision_window' must be in [1, 32], "
-                     "'health.vision_min_offered' >= 1 and 'health.images_frozen' >= 2");
+                     "'health.vision_min_offered' >= 1, 'health.vision_min_used' >= 0 and "
+                     "'health.images_frozen' >= 2");
 }
 
 // --- the press check
@@ -279,6 +288,7 @@ void HealthMonitor::Decide(double t) {
     worse(HealthState::kInconsistent, HealthCause::kPressingInAir, press_.gap, press_.link,
           press_.gap);
   if (tags_elsewhere_) worse(HealthState::kInconsistent, HealthCause::kTagsElsewhere, 0.0, -1);
+  int fused = -1;  // over a full vision window; -1 before one has been seen
   {
     const int n = std::min(images_seen_, params_.vision_window);
     int offered = 0, used = 0, measured = 0;
@@ -289,6 +299,7 @@ void HealthMonitor::Decide(double t) {
       used += used_[k];
       if (offered_[k] > 0) displacement += displacement_[k], ++measured;
     }
+    if (n == params_.vision_window) fused = used;
     const double gated = offered > 0 ? 1.0 - double(used) / offered : 0.0;
     if (offered >= params_.vision_min_offered && gated > params_.vision_gated_share)
       worse(HealthState::kInconsistent, HealthCause::kVisionDisagrees, gated, -1,
@@ -304,6 +315,8 @@ void HealthMonitor::Decide(double t) {
     worse(HealthState::kUncertain, HealthCause::kRelocalized, relocalized_, -1);
   if (slipping_t_ >= 0.0 && t - slipping_t_ <= params_.slip_hold)
     worse(HealthState::kUncertain, HealthCause::kSlipping, 0.0, -1);
+  if (fused >= 0 && fused < params_.vision_min_used)
+    worse(HealthState::kUncertain, HealthCause::kVisionBlind, fused, -1);
   const double sp = sigma_position_.maxCoeff(), so = sigma_orientation_.maxCoeff();
   if (sp > params_.uncertain_position)
     worse(HealthState::kUncertain, HealthCause::kWideSigma, sp, 0);

@@ -5,7 +5,7 @@
 //   ok            nothing below holds;
 //   uncertain     the estimate may be off by more than it can use, and says so: σ wide, the grip
 //                 loosened, the object just found again, the features lost, images late or
-//                 frozen;
+//                 frozen, images that fuse too little of the object to check the estimate;
 //   inconsistent  the measurements contradict the estimate: a link deep inside the object, a
 //                 finger that the torques say presses while the object is far from it, vision
 //                 whose features or tags the estimate cannot explain;
@@ -39,13 +39,16 @@ enum class HealthCause {
   kImagesFrozen,     // value: identical images in a row
   kVisionDisagrees,  // value: the share of the features offered over the last images that the
                      // estimate's gate refused
+  kVisionBlind,      // value: the features or tag corners the last images fused, together:
+                     // too few to check the estimate (HealthParams::vision_min_used)
   kTagsElsewhere,    // the tags put the object where the estimate cannot be
   kPenetration,      // value: [m] how deep link `subject` lies inside the estimated object
   kPressingInAir,    // value: [m] how far the estimated object is from the finger whose
                      // nearest link is `subject`, while its joint torques say it presses
 };
 // "none", "wide_sigma", "slipping", "relocalized", "features_lost", "images_stale",
-// "images_frozen", "vision_disagrees", "tags_elsewhere", "penetration", "pressing_in_air".
+// "images_frozen", "vision_disagrees", "vision_blind", "tags_elsewhere", "penetration",
+// "pressing_in_air".
 const char* HealthCauseName(HealthCause cause);
 
 struct Health {
@@ -95,6 +98,8 @@ struct HealthParams {
   int vision_window = 5;                // images whose gated share is judged together
   int vision_min_offered = 8;           // features offered over them, at least, to judge
   double vision_gated_share = 0.5;      // more than this share gated: vision disagrees
+  int vision_min_used = 8;              // fewer fused over a full window: vision is blind, the
+                                        // estimate unchecked by the images (0: never)
   double images_stale = 0.3;            // [s] without a new image once images came: uncertain
   int images_frozen = 3;                // identical images in a row: uncertain
   double relocalized_hold = 0.5;        // [s] uncertain after the object was found again
