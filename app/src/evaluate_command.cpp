@@ -1,6 +1,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -294,6 +295,114 @@ void MergeScenario(const EvaluateCommand& cmd, const std::string& s, int last_se
     WriteFig7Data(first, (fs::path(cmd.out) / ("fig7_" + s + ".csv")).string());
 }
 
+// Does each set say when it is wrong? Over every scenario and seed of the evaluation, per set
+// (docs/evaluation.md, "Health"): a run is *bad* when it ends more than twice its scenario's
+// median position error for that set, or more than 15 mm off, and *good* within 1.5× that median;
+// it *alarmed* when it said `inconsistent` or `lost` at some time. Written as trust.json and as a
+// section of table1.md.
+Json MergeTrust(const EvaluateCommand& cmd, const std::vector<std::string>& scenarios,
+                int last_seed, std::ostream& md) {
+  struct Run {
+    std::string scenario;
+    int seed = 0;
+    double mm = 0, deg = 0, alarmed_share = 0;
+    bool alarmed = false, silent = false;
+  };
+  std::map<std::string, std::vector<Run>> by_set;
+  for (const std::string& s : scenarios)
+    for (int seed = cmd.first_seed; seed <= last_seed; ++seed) {
+      const fs::path summary = fs::path(RunDir(cmd.out, s, seed)) / "replay/summary.json";
+      if (!fs::exists(summary)) continue;
+      const Json j = jsonf::ReadFile(summary.string());
+      for (auto it = j.at("modalities").begin(); it != j.at("modalities").end(); ++it) {
+        const Json& v = it.value();
+        if (!v.contains("terminal_position_error_mm")) continue;
+        Run r;
+        r.scenario = s;
+        r.seed = seed;
+        r.mm = v.at("terminal_position_error_mm").get<double>();
+        r.deg = v.at("terminal_orientation_error_deg").get<double>();
+        r.alarmed = v.value("health_alarms", 0) > 0;
+        r.silent = !r.alarmed && v.value("health_final", std::string()) == "ok";
+        if (v.contains("health_time_share"))
+          r.alarmed_share = v.at("health_time_share").value("inconsistent", 0.0) +
+                            v.at("health_time_share").value("lost", 0.0);
+        by_set[it.key()].push_back(r);
+      }
+    }
+  const auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  };
+  // jt's run of the same scenario and seed, for "worse than jt".
+  const auto jt_of = [&](const Run& r) -> const Run* {
+    const auto jt = by_set.find("jt");
+    if (jt == by_set.end()) return nullptr;
+    for (const Run& x : jt->second)
+      if (x.scenario == r.scenario && x.seed == r.seed) return &x;
+    return nullptr;
+  };
+  Json out = Json::object();
+  md << "\n## Trust: does each set say when it is wrong?\n\n"
+     << "Over every scenario and seed above. Bad: a run that ends more than twice its scenario's "
+        "median position error for the set, or more than 15 mm off; good: within 1.5x that "
+        "median. Alarmed: said `inconsistent` or `lost` at some time. Silent: a bad run that "
+        "never alarmed and ended `ok`. Worse than jt: more than 5 mm or 10 deg worse than jt's run "
+        "of the same scenario and seed.\n\n"
+     << "| set | runs | bad | bad that alarmed | silent bad | good runs' time alarmed | worse "
+        "than jt | of them alarmed | worst run [mm] |\n"
+     << "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  for (const ModalitySet& m : ParseModalities(cmd.modalities)) {
+    const auto found = by_set.find(m.name);
+    if (found == by_set.end()) continue;
+    const std::vector<Run>& runs = found->second;
+    std::map<std::string, std::vector<double>> per_scenario;
+    for (const Run& r : runs) per_scenario[r.scenario].push_back(r.mm);
+    std::map<std::string, double> med;
+    for (const auto& [s, v] : per_scenario) med[s] = median(v);
+    int bad = 0, bad_alarmed = 0, silent = 0, good = 0, worse = 0, worse_alarmed = 0;
+    double good_share = 0.0;
+    const Run* worst = &runs.front();
+    for (const Run& r : runs) {
+      if (r.mm > worst->mm) worst = &r;
+      const double md_s = med[r.scenario];
+      if (r.mm > 2.0 * md_s || r.mm > 15.0) {
+        ++bad;
+        bad_alarmed += r.alarmed;
+        silent += r.silent;
+      } else if (r.mm <= 1.5 * md_s) {
+        ++good;
+        good_share += r.alarmed_share;
+      }
+      if (m.name != "jt")
+        if (const Run* jt = jt_of(r); jt && (r.mm > jt->mm + 5.0 || r.deg > jt->deg + 10.0)) {
+          ++worse;
+          worse_alarmed += r.alarmed;
+        }
+    }
+    const bool compared = m.name != "jt" && by_set.count("jt");
+    Json cell = {{"runs", runs.size()},
+                 {"bad", bad},
+                 {"bad_alarmed", bad_alarmed},
+                 {"silent_bad", silent},
+                 {"good", good},
+                 {"good_time_alarmed", good > 0 ? good_share / good : 0.0},
+                 {"worst_scenario", worst->scenario},
+                 {"worst_seed", worst->seed},
+                 {"worst_position_mm", worst->mm}};
+    if (compared) cell["worse_than_jt"] = worse, cell["worse_than_jt_alarmed"] = worse_alarmed;
+    out[m.name] = cell;
+    md << "| " << m.name << " | " << runs.size() << " | " << bad << " | " << bad_alarmed << " | "
+       << silent << " | " << std::fixed << std::setprecision(1)
+       << (good > 0 ? 100.0 * good_share / good : 0.0) << " % of " << good << " | "
+       << (compared ? std::to_string(worse) : "-") << " | "
+       << (compared ? std::to_string(worse_alarmed) : "-") << " | " << worst->mm << " ("
+       << worst->scenario << " " << worst->seed << ") |\n";
+  }
+  return out;
+}
+
 int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
   if (cmd.out.empty()) throw InputError("evaluate: --out DIR is required");
   if (cmd.seeds < 1 || cmd.seeds > 1000)
@@ -348,6 +457,8 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
         "mean "
         "| penetration mean / max [mm] |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n";
   for (const std::string& s : scenarios) MergeScenario(cmd, s, last_seed, table, md);
+  const Json trust = MergeTrust(cmd, scenarios, last_seed, md);
+  std::ofstream(fs::path(cmd.out) / "trust.json") << trust.dump(2) << "\n";
   std::ofstream(fs::path(cmd.out) / "table1.md") << md.str();
   std::ofstream(fs::path(cmd.out) / "table1.json") << table.dump(2) << "\n";
   std::cout << md.str();

@@ -763,6 +763,34 @@ TEST(Cli, EvaluatePlansRunsAndMerges) {
   }
   EXPECT_TRUE(std::filesystem::exists(dir / "e/table1.md"));
   EXPECT_TRUE(std::filesystem::exists(dir / "e/fig7_ketchup-power-grasp.png"));
+  // The trust table, against the run's own summary: with one run a set's median is that run, so
+  // it is bad only beyond 15 mm, and good otherwise.
+  const Json trust = Json::parse(test::ReadFile(dir / "e/trust.json"));
+  const Json run_summary = Json::parse(
+      test::ReadFile(dir / "e/runs/ketchup-power-grasp-seed1/replay/summary.json"))["modalities"];
+  const Json& jt = run_summary.at("jt");
+  for (const char* set : {"j", "jt", "jta", "jtf"}) {
+    const Json& cell = trust.at(set);
+    const Json& mine = run_summary.at(set);
+    const double mm = mine.at("terminal_position_error_mm").get<double>();
+    const bool bad = mm > 15.0, alarmed = mine.at("health_alarms").get<int>() > 0;
+    EXPECT_EQ(cell.at("runs"), 1) << set;
+    EXPECT_EQ(cell.at("bad"), bad ? 1 : 0) << set;
+    EXPECT_EQ(cell.at("good"), bad ? 0 : 1) << set;
+    EXPECT_EQ(cell.at("bad_alarmed"), bad && alarmed ? 1 : 0) << set;
+    EXPECT_DOUBLE_EQ(cell.at("worst_position_mm").get<double>(), mm) << set;
+    if (std::string(set) == "jt") {
+      EXPECT_FALSE(cell.contains("worse_than_jt"));
+      continue;
+    }
+    const bool worse = mm > jt.at("terminal_position_error_mm").get<double>() + 5.0 ||
+                       mine.at("terminal_orientation_error_deg").get<double>() >
+                           jt.at("terminal_orientation_error_deg").get<double>() + 10.0;
+    EXPECT_EQ(cell.at("worse_than_jt"), worse ? 1 : 0) << set;
+  }
+  EXPECT_NE(
+      test::ReadFile(dir / "e/table1.md").find("## Trust: does each set say when it is wrong?"),
+      std::string::npos);
   EXPECT_EQ(test::RunInhand("evaluate --out " + (dir / "x") + " --scenarios nope").exit_code, 2);
 }
 
