@@ -233,15 +233,29 @@ int RunAll(const std::vector<std::pair<std::string, std::pair<std::string, int>>
   return failed;
 }
 
+// Every run's summary.json that exists, per scenario in the evaluation's order: (seed, its
+// contents), read once for Table I and the trust table.
+using SeedSummaries = std::vector<std::pair<int, Json>>;
+using Summaries = std::vector<std::pair<std::string, SeedSummaries>>;
+Summaries ReadSummaries(const EvaluateCommand& cmd, const std::vector<std::string>& scenarios,
+                        int last_seed) {
+  Summaries out;
+  for (const std::string& s : scenarios) {
+    SeedSummaries& runs = out.emplace_back(s, SeedSummaries()).second;
+    for (int seed = cmd.first_seed; seed <= last_seed; ++seed) {
+      const fs::path summary = fs::path(RunDir(cmd.out, s, seed)) / "replay/summary.json";
+      if (fs::exists(summary)) runs.emplace_back(seed, jsonf::ReadFile(summary.string()));
+    }
+  }
+  return out;
+}
+
 // One scenario's rows of Table I (into `table` and `md`) from its runs' summaries, and its
 // Fig. 7-style plot from the first seed's run.
-void MergeScenario(const EvaluateCommand& cmd, const std::string& s, int last_seed, Json& table,
-                   std::ostream& md) {
+void MergeScenario(const EvaluateCommand& cmd, const std::string& s, const SeedSummaries& summaries,
+                   Json& table, std::ostream& md) {
   std::map<std::string, std::vector<double>> pos, ori, nees, pen_mean, pen_max;
-  for (int seed = cmd.first_seed; seed <= last_seed; ++seed) {
-    const fs::path summary = fs::path(RunDir(cmd.out, s, seed)) / "replay/summary.json";
-    if (!fs::exists(summary)) continue;
-    const Json j = jsonf::ReadFile(summary.string());
+  for (const auto& [seed, j] : summaries) {
     for (auto it = j.at("modalities").begin(); it != j.at("modalities").end(); ++it) {
       if (!it.value().contains("terminal_position_error_mm")) continue;
       pos[it.key()].push_back(it.value().at("terminal_position_error_mm").get<double>());
@@ -300,8 +314,7 @@ void MergeScenario(const EvaluateCommand& cmd, const std::string& s, int last_se
 // median position error for that set, or more than 15 mm off, and *good* within 1.5× that median;
 // it *alarmed* when it said `inconsistent` or `lost` at some time. Written as trust.json and as a
 // section of table1.md.
-Json MergeTrust(const EvaluateCommand& cmd, const std::vector<std::string>& scenarios,
-                int last_seed, std::ostream& md) {
+Json MergeTrust(const EvaluateCommand& cmd, const Summaries& summaries, std::ostream& md) {
   struct Run {
     std::string scenario;
     int seed = 0;
@@ -309,11 +322,8 @@ Json MergeTrust(const EvaluateCommand& cmd, const std::vector<std::string>& scen
     bool alarmed = false, silent = false;
   };
   std::map<std::string, std::vector<Run>> by_set;
-  for (const std::string& s : scenarios)
-    for (int seed = cmd.first_seed; seed <= last_seed; ++seed) {
-      const fs::path summary = fs::path(RunDir(cmd.out, s, seed)) / "replay/summary.json";
-      if (!fs::exists(summary)) continue;
-      const Json j = jsonf::ReadFile(summary.string());
+  for (const auto& [s, runs] : summaries)
+    for (const auto& [seed, j] : runs) {
       for (auto it = j.at("modalities").begin(); it != j.at("modalities").end(); ++it) {
         const Json& v = it.value();
         if (!v.contains("terminal_position_error_mm")) continue;
@@ -456,8 +466,9 @@ int RunEvaluate(const EvaluateCommand& cmd, const std::string& self) {
      << "| scenario | set | runs | position [mm] | orientation [deg] | worst [mm / deg] | NEES "
         "mean "
         "| penetration mean / max [mm] |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n";
-  for (const std::string& s : scenarios) MergeScenario(cmd, s, last_seed, table, md);
-  const Json trust = MergeTrust(cmd, scenarios, last_seed, md);
+  const Summaries summaries = ReadSummaries(cmd, scenarios, last_seed);
+  for (const auto& [s, of_scenario] : summaries) MergeScenario(cmd, s, of_scenario, table, md);
+  const Json trust = MergeTrust(cmd, summaries, md);
   std::ofstream(fs::path(cmd.out) / "trust.json") << trust.dump(2) << "\n";
   std::ofstream(fs::path(cmd.out) / "table1.md") << md.str();
   std::ofstream(fs::path(cmd.out) / "table1.json") << table.dump(2) << "\n";
