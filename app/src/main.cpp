@@ -175,8 +175,13 @@ int main(int argc, char** argv) {
   replay_cmd->add_flag("--no-video", replay.no_video, "skip replay.mp4");
   replay_cmd->add_flag("--frames", replay.frames, "also write every annotated frame as PNG");
   replay_cmd->add_flag("--no-timeline", replay.no_timeline,
-                       "pictures without the timeline strip of events under them (which takes "
-                       "one more pass over the session without pictures)");
+                       "pictures without the timeline strip of events under them");
+  replay_cmd
+      ->add_option("--picture-memory", replay.picture_memory_mib,
+                   "MiB the pictures may hold until the session's events are known (the "
+                   "timeline strip shows them ahead); a session that needs more is replayed "
+                   "twice instead, first without pictures")
+      ->capture_default_str();
   replay_cmd->add_flag(
       "--mcap", replay.mcap,
       "also write replay.mcap for Foxglove/Lichtblick (poses, errors, image + overlays, contacts)");

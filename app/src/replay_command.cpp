@@ -341,6 +341,78 @@ class Pictures {
   std::exception_ptr error_;
 };
 
+// Pictures held until the session's events were known, drawn on `threads` composers of their own
+// (each renderer on its thread; 1: inline), at most kAhead pictures ahead of the one written next,
+// and written in order. Each state is freed once drawn.
+void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, int>>& held,
+              int threads, const std::function<Image8(FrameComposer&, const PictureState&)>& draw,
+              const std::function<void(const Image8&, int)>& write) {
+  const std::size_t count = held.size();
+  if (threads <= 1 || count < 2) {
+    FrameComposer composer(player);
+    for (auto& [state, index] : held) {
+      write(draw(composer, state), index);
+      state = PictureState();
+    }
+    return;
+  }
+  constexpr std::size_t kAhead = 8;
+  std::vector<std::optional<Image8>> drawn(count);
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::size_t written = 0;
+  bool stop = false;
+  std::exception_ptr error;
+  std::vector<std::thread> workers;
+  for (int w = 0; w < threads; ++w)
+    workers.emplace_back([&, w] {
+      try {
+        FrameComposer composer(player);  // its GL context lives on this thread
+        for (std::size_t i = static_cast<std::size_t>(w); i < count;
+             i += static_cast<std::size_t>(threads)) {
+          {
+            std::unique_lock<std::mutex> lock(mutex);
+            cv.wait(lock, [&] { return stop || i < written + kAhead; });
+            if (stop) return;
+          }
+          Image8 picture = draw(composer, held[i].first);
+          held[i].first = PictureState();
+          std::lock_guard<std::mutex> lock(mutex);
+          drawn[i] = std::move(picture);
+          cv.notify_all();
+        }
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!error) error = std::current_exception();
+        stop = true;
+        cv.notify_all();
+      }
+    });
+  try {
+    for (std::size_t i = 0; i < count; ++i) {
+      Image8 picture;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        cv.wait(lock, [&] { return stop || drawn[i].has_value(); });
+        if (stop) break;
+        picture = std::move(*drawn[i]);
+        drawn[i].reset();
+      }
+      write(picture, held[i].second);
+      std::lock_guard<std::mutex> lock(mutex);
+      ++written;
+      cv.notify_all();
+    }
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!error) error = std::current_exception();
+    stop = true;
+    cv.notify_all();
+  }
+  for (std::thread& t : workers) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
 // Every set's events over the whole session, found by a replay of its own without pictures
 // (deterministic: the same events the replay proper will find), for the video's timeline strip,
 // which shows them before they come.
@@ -359,6 +431,22 @@ std::vector<std::vector<TrackerEvent>> EventsAhead(const SessionPlayer& like, in
   }
   for (std::size_t i = 0; i < events.size(); ++i) player.CloseEvents(i, events[i]);
   return events;
+}
+
+// The memory that the pictures' states of the whole session take when held for the timeline: per
+// picture the camera image and the matched virtual view (RGB), and up to 64 KiB per set for its
+// traces.
+double HeldPictureBytes(const Session& session, const std::vector<ModalitySet>& sets, double fps,
+                        bool has_camera) {
+  const int n = session.num_samples();
+  const double pictures = has_camera ? double(session.camera_frames().size())
+                                     : std::floor((session.t(n - 1) - session.t(0)) * fps) + 2.0;
+  double per_picture = 64.0 * 1024 * double(sets.size());
+  if (has_camera) {
+    const double image = 3.0 * session.info().camera->width * session.info().camera->height;
+    per_picture += image * (sets.back().features ? 2.0 : 1.0);
+  }
+  return pictures * per_picture;
 }
 
 }  // namespace
@@ -396,6 +484,8 @@ int RunReplay(const ReplayCommand& cmd) {
   const bool want_pictures = !cmd.no_video || cmd.frames;
   if (!(cmd.video_fps > 0.0 && cmd.video_fps <= 240.0))
     throw InputError("--video-fps: expected a rate in (0, 240] Hz");
+  if (!(cmd.picture_memory_mib >= 0.0 && cmd.picture_memory_mib <= 1e6))
+    throw InputError("--picture-memory: expected MiB in [0, 1e6]");
   if (cmd.jobs < 1 || cmd.jobs > 64)
     throw InputError("--jobs is " + std::to_string(cmd.jobs) + ", expected 1..64");
   for (const std::string& w :
@@ -420,12 +510,18 @@ int RunReplay(const ReplayCommand& cmd) {
   // Under every picture, the session's timeline with its events and the current time.
   std::optional<TimelineStrip> timeline;
   std::unique_ptr<TimelineStripPainter> strip;  // painted at the first picture, as wide
-  const auto emit = [&](FrameComposer& composer, const PictureState& state, int index) {
+  std::once_flag strip_painted;
+  const auto draw = [&](FrameComposer& composer, const PictureState& state) {
     Image8 picture = has_camera ? composer.Compose(state) : composer.ComposeExternal(state);
     if (timeline) {
-      if (!strip) strip = std::make_unique<TimelineStripPainter>(*timeline, picture.width);
+      std::call_once(strip_painted, [&] {
+        strip = std::make_unique<TimelineStripPainter>(*timeline, picture.width);
+      });
       picture = StackBelow(picture, strip->At(state.t));
     }
+    return picture;
+  };
+  const auto write = [&](const Image8& picture, int index) {
     if (!cmd.no_video) {
       if (!video)
         video = std::make_unique<VideoWriter>((out / "replay.mp4").string(), fps, picture.width,
@@ -438,11 +534,27 @@ int RunReplay(const ReplayCommand& cmd) {
       WriteImage((out / name).string(), picture);
     }
   };
-  if (want_pictures && !cmd.no_timeline && n > 0)
+  const auto emit = [&](FrameComposer& composer, const PictureState& state, int index) {
+    write(draw(composer, state), index);
+  };
+  // The timeline strip needs every event before the first picture. When the pictures' states fit
+  // in --picture-memory, they are held through the one pass and drawn after it, with the events
+  // that pass found; otherwise a pass of its own without pictures finds the events first.
+  const bool want_timeline = want_pictures && !cmd.no_timeline && n > 0;
+  const bool hold = want_timeline && HeldPictureBytes(session, sets, fps, has_camera) <=
+                                         cmd.picture_memory_mib * double(1 << 20);
+  std::vector<std::pair<PictureState, int>> held;
+  if (want_timeline && !hold)
     timeline =
         MakeTimelineStrip(sets, EventsAhead(player, cmd.jobs), session.t(0), session.t(n - 1));
   std::unique_ptr<Pictures> drawn;
-  if (want_pictures) drawn = std::make_unique<Pictures>(player, cmd.jobs > 1, emit);
+  if (want_pictures && !hold) drawn = std::make_unique<Pictures>(player, cmd.jobs > 1, emit);
+  const auto add_picture = [&](PictureState state, int index) {
+    if (hold)
+      held.emplace_back(std::move(state), index);
+    else
+      drawn->Add(std::move(state), index);
+  };
   std::vector<SetStats> stats(sets.size());
   std::vector<std::vector<TrackerEvent>> events(sets.size());
   std::vector<EstimateRecord> records;
@@ -451,7 +563,7 @@ int RunReplay(const ReplayCommand& cmd) {
   for (int k = 0; k < n;) {
     // A block of samples up to the next camera frame (or the next picture of the 3-D view).
     int max_samples = 256;
-    if (drawn && !has_camera) {
+    if (want_pictures && !has_camera) {
       int j = k;
       while (j < n - 1 && session.t(j) < next_picture_t - kTimeTolerance) ++j;
       max_samples = std::min(max_samples, j - k + 1);
@@ -470,11 +582,11 @@ int RunReplay(const ReplayCommand& cmd) {
     k += count;
     const double t = session.t(k - 1);
     // The camera frame the block's last sample processed, if any.
-    if (const int frame = player.last_frame(); frame >= 0 && drawn && has_camera)
-      drawn->Add(FrameComposer::Capture(player, frame, t), frame);
+    if (const int frame = player.last_frame(); frame >= 0 && want_pictures && has_camera)
+      add_picture(FrameComposer::Capture(player, frame, t), frame);
     // No camera: a picture of the 3-D view whenever the video's clock passes a sample.
-    if (drawn && !has_camera && t >= next_picture_t - kTimeTolerance) {
-      drawn->Add(FrameComposer::Capture(player, -1, t), pictures++);
+    if (want_pictures && !has_camera && t >= next_picture_t - kTimeTolerance) {
+      add_picture(FrameComposer::Capture(player, -1, t), pictures++);
       next_picture_t = session.t(0) + pictures / fps;
     }
     progress.Show(k, n);
@@ -487,6 +599,10 @@ int RunReplay(const ReplayCommand& cmd) {
     player.CloseEvents(i, closed);
     if (mcap && n > 0) mcap->AddEvents(i, closed, session.t(n - 1));
     events[i].insert(events[i].end(), closed.begin(), closed.end());
+  }
+  if (hold) {  // the held pictures, now that every event is known
+    timeline = MakeTimelineStrip(sets, events, session.t(0), session.t(n - 1));
+    DrawHeld(player, held, std::min(cmd.jobs, 4), draw, write);
   }
   WriteEvents(out / "events.csv", sets, events, player.models().hand);
   if (video) video->Close();

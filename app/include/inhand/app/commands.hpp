@@ -67,9 +67,12 @@ struct ReplayCommand {
   std::string params;      // TrackerParams JSON, "" = defaults
   bool no_video = false;
   bool frames = false;       // also write each annotated frame as PNG
-  bool no_timeline = false;  // pictures without the timeline strip (and its events' pre-pass)
-  double video_fps = 30.0;   // sessions without a camera: the 3-D view's frame rate
-  bool mcap = false;         // also write replay.mcap (Foxglove, Lichtblick)
+  bool no_timeline = false;  // pictures without the timeline strip
+  // [MiB] the pictures' states held for the timeline strip, drawn after the one pass over the
+  // session; a session that needs more replays its sets twice (first for the events) instead
+  double picture_memory_mib = 1536.0;
+  double video_fps = 30.0;  // sessions without a camera: the 3-D view's frame rate
+  bool mcap = false;        // also write replay.mcap (Foxglove, Lichtblick)
   int jobs = 2;  // threads: the sets in parallel, the pictures beside them (1: sequential)
 };
 int RunReplay(const ReplayCommand& cmd);
