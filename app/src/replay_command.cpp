@@ -363,6 +363,12 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
   std::size_t written = 0;
   bool stop = false;
   std::exception_ptr error;
+  const auto fail = [&](std::exception_ptr e) {  // the first failure stops every thread
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!error) error = e;
+    stop = true;
+    cv.notify_all();
+  };
   std::vector<std::thread> workers;
   for (int w = 0; w < threads; ++w)
     workers.emplace_back([&, w] {
@@ -382,10 +388,7 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
           cv.notify_all();
         }
       } catch (...) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (!error) error = std::current_exception();
-        stop = true;
-        cv.notify_all();
+        fail(std::current_exception());
       }
     });
   try {
@@ -404,10 +407,7 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
       cv.notify_all();
     }
   } catch (...) {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (!error) error = std::current_exception();
-    stop = true;
-    cv.notify_all();
+    fail(std::current_exception());
   }
   for (std::thread& t : workers) t.join();
   if (error) std::rethrow_exception(error);
