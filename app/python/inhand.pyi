@@ -128,6 +128,7 @@ def replay(
     timeline: bool = True,
     mcap: bool = False,
     jobs: int = 2,
+    picture_memory: float = 1536.0,
 ) -> Dict[str, Any]: ...
 def evaluate(
     out: str,

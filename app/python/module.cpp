@@ -708,7 +708,8 @@ PYBIND11_MODULE(inhand, m) {
   m.def(
       "replay",
       [](const std::string& session, const std::string& out, const std::string& sets,
-         const py::object& params, bool video, bool frames, bool timeline, bool mcap, int jobs) {
+         const py::object& params, bool video, bool frames, bool timeline, bool mcap, int jobs,
+         double picture_memory) {
         const ParamsFile params_file(params);
         app::ReplayCommand cmd;
         cmd.session = session;
@@ -720,6 +721,7 @@ PYBIND11_MODULE(inhand, m) {
         cmd.no_timeline = !timeline;
         cmd.mcap = mcap;
         cmd.jobs = jobs;
+        cmd.picture_memory_mib = picture_memory;
         int code = 0;
         {
           py::gil_scoped_release release;
@@ -731,8 +733,11 @@ PYBIND11_MODULE(inhand, m) {
       py::arg("session"), py::arg("out"), py::kw_only(), py::arg("sets") = "",
       py::arg("params") = py::none(), py::arg("video") = true, py::arg("frames") = false,
       py::arg("timeline") = true, py::arg("mcap") = false, py::arg("jobs") = 2,
+      py::arg("picture_memory") = app::ReplayCommand().picture_memory_mib,
       "Replays a session with each set (\"\": every set it supports) into out, as `inhand "
-      "replay`; returns summary.json as a dict. params: None, a dict, JSON text or a path.");
+      "replay`; returns summary.json as a dict. params: None, a dict, JSON text or a path. "
+      "picture_memory: MiB the pictures may hold until the events are known (the timeline "
+      "strip); beyond it the sets run twice, first without pictures.");
   m.def(
       "evaluate",
       [](const std::string& out, const std::string& scenarios, int seeds, int first_seed,

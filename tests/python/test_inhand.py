@@ -263,6 +263,9 @@ class Commands(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "unknown parameter 'contact_sigmaa'"):
             inhand.replay(f.session_dir, os.path.join(f.tmp.name, "y"), video=False,
                           params='{"contact_sigmaa": 1}')
+        with self.assertRaisesRegex(ValueError, "--picture-memory: expected MiB"):
+            inhand.replay(f.session_dir, os.path.join(f.tmp.name, "y"), video=False,
+                          picture_memory=-1)
 
     def test_evaluate_returns_table1(self):
         f = Fixture.get()
