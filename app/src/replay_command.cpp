@@ -358,7 +358,7 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
   }
   constexpr std::size_t kAhead = 8;
   std::vector<std::optional<Image8>> drawn(count);
-  std::mutex mutex;
+  std::mutex mutex, creating;
   std::condition_variable cv;
   std::size_t written = 0;
   bool stop = false;
@@ -373,7 +373,11 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
   for (int w = 0; w < threads; ++w)
     workers.emplace_back([&, w] {
       try {
-        FrameComposer composer(player);  // its GL context lives on this thread
+        std::unique_ptr<FrameComposer> composer;
+        {  // one context created at a time: the first one sets the renderer library up
+          std::lock_guard<std::mutex> lock(creating);
+          composer = std::make_unique<FrameComposer>(player);  // its GL context: this thread's
+        }
         for (std::size_t i = static_cast<std::size_t>(w); i < count;
              i += static_cast<std::size_t>(threads)) {
           {
@@ -381,7 +385,7 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
             cv.wait(lock, [&] { return stop || i < written + kAhead; });
             if (stop) return;
           }
-          Image8 picture = draw(composer, held[i].first);
+          Image8 picture = draw(*composer, held[i].first);
           held[i].first = PictureState();
           std::lock_guard<std::mutex> lock(mutex);
           drawn[i] = std::move(picture);
