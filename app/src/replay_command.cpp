@@ -243,13 +243,13 @@ Json SetSummary(const ModalitySet& set, const SetStats& st, const TrackerStats& 
 // The progress bar on a terminal: redrawn when the percentage changes.
 class ProgressBar {
  public:
-  ProgressBar() : tty_(::isatty(STDERR_FILENO)) {}
+  explicit ProgressBar(const char* what = "replay") : what_(what), tty_(::isatty(STDERR_FILENO)) {}
   void Show(int k, int n) {
     const int percent = static_cast<int>(100.0 * k / n);
     if (!tty_ || (percent == shown_ && k != n)) return;
     shown_ = percent;
     const int width = 40, done = static_cast<int>(std::lround(width * double(k) / n));
-    std::fprintf(stderr, "\rreplay [%s%s] %3d%%",
+    std::fprintf(stderr, "\r%-8s [%s%s] %3d%%", what_,
                  std::string(static_cast<std::size_t>(done), '#').c_str(),
                  std::string(static_cast<std::size_t>(width - done), ' ').c_str(), percent);
   }
@@ -258,6 +258,7 @@ class ProgressBar {
   }
 
  private:
+  const char* what_;
   bool tty_;
   int shown_ = -1;
 };
@@ -606,7 +607,14 @@ int RunReplay(const ReplayCommand& cmd) {
   }
   if (hold) {  // the held pictures, now that every event is known
     timeline = MakeTimelineStrip(sets, events, session.t(0), session.t(n - 1));
-    DrawHeld(player, held, std::min(cmd.jobs, 4), draw, write);
+    ProgressBar drawing("pictures");
+    const int count = static_cast<int>(held.size());
+    int done = 0;
+    DrawHeld(player, held, std::min(cmd.jobs, 4), draw, [&](const Image8& picture, int index) {
+      write(picture, index);
+      drawing.Show(++done, count);
+    });
+    drawing.End();
   }
   WriteEvents(out / "events.csv", sets, events, player.models().hand);
   if (video) video->Close();
