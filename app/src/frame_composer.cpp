@@ -99,11 +99,12 @@ FrameComposer::FrameComposer(const SessionPlayer& player)
   painter_ = std::make_unique<OverlayPainter>(renderer_, object_meshes_);
 }
 
-PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, double t) {
+PictureState FrameComposer::Capture(const SessionPlayer& p, int camera_frame, double t,
+                                    bool camera_image) {
   PictureState st;
   st.t = t;
   st.camera_frame = camera_frame;
-  if (camera_frame >= 0)
+  if (camera_frame >= 0 && camera_image)
     st.camera = p.last_frame() == camera_frame && !p.last_image().empty()
                     ? p.last_image()
                     : p.session().LoadImage(camera_frame);

@@ -342,6 +342,13 @@ class Pictures {
   std::exception_ptr error_;
 };
 
+// A held picture's camera image, read again from the session (the one the trackers read): the
+// states are held without it, which halves their memory.
+void ReadCameraImage(const SessionPlayer& player, PictureState& state) {
+  if (state.camera_frame >= 0 && state.camera.empty())
+    state.camera = player.session().LoadImage(state.camera_frame);
+}
+
 // Pictures held until the session's events were known, drawn on `threads` composers of their own
 // (each renderer on its thread; 1: inline), at most kAhead pictures ahead of the one written next,
 // and written in order. Each state is freed once drawn.
@@ -352,6 +359,7 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
   if (threads <= 1 || count < 2) {
     FrameComposer composer(player);
     for (auto& [state, index] : held) {
+      ReadCameraImage(player, state);
       write(draw(composer, state), index);
       state = PictureState();
     }
@@ -386,6 +394,7 @@ void DrawHeld(const SessionPlayer& player, std::vector<std::pair<PictureState, i
             cv.wait(lock, [&] { return stop || i < written + kAhead; });
             if (stop) return;
           }
+          ReadCameraImage(player, held[i].first);
           Image8 picture = draw(*composer, held[i].first);
           held[i].first = PictureState();
           std::lock_guard<std::mutex> lock(mutex);
@@ -439,18 +448,16 @@ std::vector<std::vector<TrackerEvent>> EventsAhead(const SessionPlayer& like, in
 }
 
 // The memory that the pictures' states of the whole session take when held for the timeline: per
-// picture the camera image and the matched virtual view (RGB), and up to 64 KiB per set for its
-// traces.
+// picture the matched virtual view (RGB; the camera image is read again when drawn), and up to
+// 64 KiB per set for its traces.
 double HeldPictureBytes(const Session& session, const std::vector<ModalitySet>& sets, double fps,
                         bool has_camera) {
   const int n = session.num_samples();
   const double pictures = has_camera ? double(session.camera_frames().size())
                                      : std::floor((session.t(n - 1) - session.t(0)) * fps) + 2.0;
   double per_picture = 64.0 * 1024 * double(sets.size());
-  if (has_camera) {
-    const double image = 3.0 * session.info().camera->width * session.info().camera->height;
-    per_picture += image * (sets.back().features ? 2.0 : 1.0);
-  }
+  if (has_camera && sets.back().features)
+    per_picture += 3.0 * session.info().camera->width * session.info().camera->height;
   return pictures * per_picture;
 }
 
@@ -588,7 +595,7 @@ int RunReplay(const ReplayCommand& cmd) {
     const double t = session.t(k - 1);
     // The camera frame the block's last sample processed, if any.
     if (const int frame = player.last_frame(); frame >= 0 && want_pictures && has_camera)
-      add_picture(FrameComposer::Capture(player, frame, t), frame);
+      add_picture(FrameComposer::Capture(player, frame, t, !hold), frame);  // held: read later
     // No camera: a picture of the 3-D view whenever the video's clock passes a sample.
     if (want_pictures && !has_camera && t >= next_picture_t - kTimeTolerance) {
       add_picture(FrameComposer::Capture(player, -1, t), pictures++);

@@ -56,8 +56,10 @@ class FrameComposer {
  public:
   // Draws with its own renderer, on the thread that calls it (one at a time).
   explicit FrameComposer(const SessionPlayer& player);
-  // The player's state now, at time t, with camera frame `camera_frame` (-1: none).
-  static PictureState Capture(const SessionPlayer& player, int camera_frame, double t);
+  // The player's state now, at time t, with camera frame `camera_frame` (-1: none); without its
+  // image when `camera_image` is false (the caller reads it when it draws).
+  static PictureState Capture(const SessionPlayer& player, int camera_frame, double t,
+                              bool camera_image = true);
   Image8 Compose(const PictureState& state, const OverlayLayers& layers = {});
   Image8 Compose(int camera_frame, double t, const OverlayLayers& layers = {}) {
     return Compose(Capture(p_, camera_frame, t), layers);
