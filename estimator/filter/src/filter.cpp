@@ -68,6 +68,8 @@ Filter::Filter(const HandModel& hand, ContactQuery& contacts, const FilterParams
   s_.q_prev = Eigen::VectorXd::Zero(m_);
   s_.q_window = Eigen::VectorXd::Zero(m_);
   s_.q_eff = Eigen::VectorXd::Zero(m_);
+  s_.push_O.assign(hand.links.size(), Vec3::Zero());
+  penetrating_.assign(hand.links.size(), 0);
   delta_ = Eigen::VectorXd::Zero(na_);
   J_.setZero(3, m_);
   // Columns a source does not see stay zero (the contacts never touch the camera's).
@@ -130,6 +132,7 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
   s_.q_prev = q_meas;
   s_.have_prev = true;
   s_.active.clear();
+  std::fill(s_.push_O.begin(), s_.push_O.end(), Vec3::Zero());
   s_.trace.Clear();
   s_.grip = s_.max_grip = 0.0;
   s_.q_window = q_meas;
@@ -139,7 +142,7 @@ void Filter::Reset(const Transform& T_PO, const Eigen::Ref<const Eigen::VectorXd
 
 void Filter::Restore(const FilterState& state) {
   INHAND_CHECK(state.b.size() == m_ && state.q_window.size() == m_ && state.P.rows() == na_ &&
-                   state.P.cols() == na_,
+                   state.P.cols() == na_ && state.push_O.size() == s_.push_O.size(),
                "filter state of another hand or parameters");
   s_ = state;  // same sizes: Eigen and std::vector reuse their storage
   delta_.setZero();
@@ -169,6 +172,7 @@ void Filter::Relocate(const Transform& T_PO, const Mat6& pose_covariance) {
   s_.P.leftCols<6>().setZero();
   s_.P.topLeftCorner<6, 6>() = 0.5 * (pose_covariance + pose_covariance.transpose());
   s_.active.clear();
+  std::fill(s_.push_O.begin(), s_.push_O.end(), Vec3::Zero());
 }
 
 Transform Filter::T_PO() const { return MakeTransform(s_.p, s_.R); }

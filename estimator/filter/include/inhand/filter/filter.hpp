@@ -122,6 +122,9 @@ struct FilterState {
   Eigen::VectorXd q_window;  // the joints where the current travel window began
   double window_time = 0.0;  // [s] since then
   std::vector<ActiveContact> active;
+  // Per link: the direction (object frame, from the link into the object) in which its last
+  // penetration was pushed out, zero when it did not penetrate at the last contact step.
+  std::vector<Vec3> push_O;
   FilterTrace trace;  // what the last step decided
 };
 
@@ -208,6 +211,9 @@ class Filter {
   bool ApplyContactConstraint(const ContactPair& pair,
                               const Eigen::Matrix<double, 3, Eigen::Dynamic>& J_f,
                               FilterTrace::Contact& rec);
+  // Penetrating pairs keep the direction of their link's last push when a new one opposes it
+  // (FilterState::push_O); links not penetrating forget theirs.
+  void KeepPushDirections();
   void CapContactInformation(double var);  // contact_model_sigma, after a normal-only constraint
   void CapVisualInformation(const Eigen::Matrix2d& R);  // visual_model_sigma, after a feature
   double CandidateWeight(double distance) const;
@@ -240,6 +246,7 @@ class Filter {
   std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> Jc_;  // per candidate
   std::vector<double> inv_weight_;                            // per candidate
   std::vector<double> finger_nearest_;                        // per joint: nearest candidate
+  std::vector<char> penetrating_;                             // per link: inside at this step
   bool torque_forces_ = false;                                // y_ holds this step's solve
   Eigen::MatrixXd JtJ_;
   Eigen::VectorXd y_, dq_;
