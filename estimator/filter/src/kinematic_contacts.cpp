@@ -58,7 +58,7 @@ void Filter::ContactStep(const Eigen::Ref<const Eigen::VectorXd>& tau, int itera
 
 // A link inside the object is pushed out the way it was pushed at the last step while it stays
 // inside: it cannot have crossed the object's middle in one step. Where the link straddles that
-// middle (a palm 12 mm deep across a bottle's neck), the field's normal flips from one step to
+// middle (a palm 12 mm deep across a bottle), the field's normal flips from one step to
 // the next as the estimate moves by a fraction of a millimetre, the pushes cancel, and the link
 // stayed inside for the rest of the run (hard shampoo seed 311). The kept direction replaces a
 // new one that opposes it; the depth is the field's.
