@@ -30,6 +30,7 @@ Rgb EventColour(const TrackerEvent& e) {
     case EventKind::kFeaturesFound:
     case EventKind::kRelocalized:
     case EventKind::kRecovered:
+    case EventKind::kStartSettled:
       return {80, 200, 255};
     case EventKind::kShiftRefused:
       return {90, 130, 255};

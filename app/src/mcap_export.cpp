@@ -269,10 +269,10 @@ void McapExport::AddSample(int k, const EstimateRecord* records, int frame) {
 void McapExport::AddEvents(std::size_t i, const std::vector<TrackerEvent>& events, double t) {
   const HandModel& hand = p_.models().hand;
   for (const TrackerEvent& ev : events) {
-    // foxglove_msgs/Log's levels: 2 info, 3 warning (inconsistent, NEES beyond its bound), 4 error
-    // (lost).
+    // foxglove_msgs/Log's levels: 2 info, 3 warning (inconsistent, NEES beyond its bound, a start
+    // inside the object), 4 error (lost).
     std::uint8_t level = 2;
-    if (ev.kind == EventKind::kNeesBeyondBound ||
+    if (ev.kind == EventKind::kNeesBeyondBound || ev.kind == EventKind::kStartSettled ||
         (ev.kind == EventKind::kHealth && ev.health.state == HealthState::kInconsistent))
       level = 3;
     if (ev.kind == EventKind::kHealth && ev.health.state == HealthState::kLost) level = 4;

@@ -201,6 +201,91 @@ TEST(HandPlausibility, SettlesOntoThePressingFingerOnAYcbScan) {
   CheckSettle(hand, LoadObjectModel(test::SharedAssets() + "/objects/ycb/mustard_bottle.urdf"));
 }
 
+// The project's palm is a box 86 x 96 x 30 mm centred at (0, 48, -15) mm, and its fingers close
+// towards +z (assets/tools/generate_assets.py): the thinnest direction of the box, signed by the
+// fingertips of a curled hand.
+TEST(HandFingers, ThePalmsGraspSideIsWhereTheFingersClose) {
+  const HandModel hand =
+      LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  const HandFingers fingers(hand);
+  ASSERT_EQ(fingers.palm, hand.LinkIndex("palm"));
+  EXPECT_LT((fingers.palm_centre_L - Vec3(0.0, 0.048, -0.015)).norm(), 5e-4);
+  EXPECT_GT(std::abs(fingers.palm_normal_L.z()), std::cos(5.0 * M_PI / 180.0));
+  KinematicsData kin(hand);
+  for (const double curl : {0.2, 0.5, 0.9}) {
+    Eigen::VectorXd q(hand.num_q());
+    for (int j = 0; j < hand.num_q(); ++j)
+      q[j] = hand.QJoint(j).lower + curl * (hand.QJoint(j).upper - hand.QJoint(j).lower);
+    kin.Update(hand, q);
+    const auto [centre, normal] = fingers.GraspSide(kin.link_poses());
+    EXPECT_LT((centre - Vec3(0.0, 0.048, -0.015)).norm(), 5e-4) << "curl " << curl;
+    EXPECT_GT(normal.z(), std::cos(5.0 * M_PI / 180.0)) << "curl " << curl;
+  }
+}
+
+// A start with the palm deep inside the bottle and the bottle's centre just behind the palm's
+// middle: settled by itself it leaves through the back of the palm. SettleStart puts it on the
+// grasp side, with nothing inside, nearer the pose it came from. A start with nothing deep inside,
+// or one whose own way out is the nearest on the grasp side, is kept as it is.
+TEST(HandPlausibility, ADeepStartIsSettledOnTheGraspSide) {
+  const HandModel hand =
+      LoadHandModel(test::ProjectAsset("hands/inhand_hand/inhand_hand.urdf"), {{}, false});
+  const ObjectModel object =
+      LoadObjectModel(test::ProjectAsset("objects/shampoo_bottle/object.json"));
+  BulletContactQuery query(hand, object);
+  HandPlausibility plausibility(hand, query);
+  KinematicsData kin(hand);
+  Eigen::VectorXd q(hand.num_q());
+  for (int j = 0; j < hand.num_q(); ++j)
+    q[j] = hand.QJoint(j).lower + 0.3 * (hand.QJoint(j).upper - hand.QJoint(j).lower);
+  kin.Update(hand, q);
+  const std::vector<Transform>& T_PL = kin.link_poses();
+  const HealthParams p;
+  const double reach = 0.15, sigma = 0.02;
+  const Eigen::VectorXd no_torque;
+  const Vec3 centre_O = object.Bounds().Center();
+  const auto [palm_c, normal] = plausibility.fingers().GraspSide(T_PL);
+  const auto side = [&](const Transform& T) { return (T * centre_O - palm_c).dot(normal); };
+  // The bottle lying across the palm, its axis along the palm's x, in front of it where nothing
+  // touches it.
+  Transform truth = MakeTransform(Vec3::Zero(), ExpSO3(Vec3(0.0, M_PI / 2, 0.0)));
+  for (double z = 0.0; z < 0.3; z += 0.001) {
+    truth.translation() = palm_c + Vec3(0.01, 0.0, z) - truth.linear() * centre_O;
+    if (plausibility.Score(no_torque, T_PL, truth, p, reach).penetration == 0.0) break;
+  }
+  ASSERT_EQ(plausibility.Score(no_torque, T_PL, truth, p, reach).penetration, 0.0);
+  const HandPlausibility::StartChoice kept =
+      plausibility.SettleStart(no_torque, T_PL, truth, centre_O, sigma, p, reach);
+  EXPECT_EQ(kept.hypothesis, -1);
+  EXPECT_TRUE(kept.T_PO.matrix() == truth.matrix());
+
+  Transform start = truth;
+  start.translation() += (-side(truth) - 0.003) * normal;  // the centre 3 mm behind the middle
+  const HandPlausibility::StartChoice choice =
+      plausibility.SettleStart(no_torque, T_PL, start, centre_O, sigma, p, reach);
+  ASSERT_GT(choice.penetration, 0.01);
+  const Transform alone = plausibility.Settle(no_torque, T_PL, start, p, reach);
+  EXPECT_LT(side(alone), 0.0);  // what the start alone comes to: behind the palm
+  ASSERT_GE(choice.hypothesis, 0);
+  EXPECT_GT(side(choice.T_PO), 0.0);
+  EXPECT_LE(plausibility.Score(no_torque, T_PL, choice.T_PO, p, reach).penetration, p.penetration);
+  EXPECT_TRUE(choice.T_PO.linear().isApprox(start.linear()));
+  EXPECT_LT((choice.T_PO.translation() - truth.translation()).norm(),
+            (alone.translation() - truth.translation()).norm());
+  // Within the hypotheses' reach: 2 sigma along an axis, then out of the palm.
+  EXPECT_LT((choice.T_PO.translation() - start.translation()).norm(), 2.0 * sigma + 0.06);
+
+  // 12 mm into the palm from the front: its own way out is the nearest, and the filter's contact
+  // updates take it themselves.
+  Transform shallow = truth;
+  shallow.translation() -= 0.012 * normal;
+  const HandPlausibility::StartChoice own =
+      plausibility.SettleStart(no_torque, T_PL, shallow, centre_O, sigma, p, reach);
+  ASSERT_GT(own.penetration, p.penetration);
+  EXPECT_EQ(own.hypothesis, -1);
+  EXPECT_TRUE(own.T_PO.matrix() == shallow.matrix());
+}
+
 TEST(HandPlausibility, ExcessCountsOnlyWhatTheThresholdsDoNotAdmit) {
   HealthParams p;
   Plausibility s;

@@ -166,6 +166,51 @@ TEST(Tracker, AnObjectTheEstimateLostIsFoundAgainAndTheEstimateMovedBack) {
   EXPECT_DOUBLE_EQ(visual[2]->value, relocalized);
 }
 
+// A start with the bottle's centre 3 mm behind the middle of the palm (the project's palm: a box
+// 30 mm thick centred 15 mm behind the palm frame, its grasp side +z) puts the palm and the
+// thumb deep inside the bottle. The tracker begins on the grasp side instead, says so at the first
+// sample, and its σ covers the move; the session's own start, with nothing deep inside, begins
+// where it is.
+TEST(Tracker, AStartInsideTheObjectBeginsOnThePalmsGraspSide) {
+  const Recording& r = Recording::Get();
+  const SessionInfo& info = r.session.info();
+  const Vec3 centre_O = r.models.object.Bounds().Center();
+  Transform start = info.initial_T_PO;
+  start.translation().z() += -0.018 - (start * centre_O).z();
+  const StartSigmas sigmas{info.sigma_position, info.sigma_orientation, info.sigma_joint_bias, {}};
+  for (const std::string set : {"j", "jt"}) {
+    Tracker tracker(r.models.hand, r.models.object, Set(set), TrackerParams());
+    tracker.Start(r.session.t(0), start, sigmas);
+    Feed(r, tracker, 1, 0.0, [](int) {});
+    std::vector<TrackerEvent> events;
+    tracker.TakeEvents(events);
+    const auto settled = std::find_if(events.begin(), events.end(), [](const TrackerEvent& e) {
+      return e.kind == EventKind::kStartSettled;
+    });
+    ASSERT_NE(settled, events.end()) << set;
+    EXPECT_EQ(settled->t, r.session.t(0));
+    ASSERT_GE(settled->subject, 0) << set;  // the deepest link: here the thumb, from the front
+    const double moved = (tracker.T_PO().translation() - start.translation()).norm();
+    EXPECT_NEAR(settled->value, moved, 0.002) << set;  // the first sample's step moves it little
+    EXPECT_GT((tracker.T_PO() * centre_O).z(), -0.015) << set;
+    const Transform truth = r.session.GroundTruthAt(r.session.t(0));
+    EXPECT_LT((tracker.T_PO().translation() - truth.translation()).norm(),
+              (start.translation() - truth.translation()).norm())
+        << set;
+    EXPECT_GE(std::sqrt(tracker.covariance()(0, 0)), info.sigma_position) << set;
+    EXPECT_NE(EventMessage(*settled, r.models.hand)
+                  .find(r.models.hand.links[static_cast<std::size_t>(settled->subject)].name),
+              std::string::npos);
+
+    Tracker plain(r.models.hand, r.models.object, Set(set), TrackerParams());
+    plain.Start(r.session.t(0), info.initial_T_PO, sigmas);
+    Feed(r, plain, 1, 0.0, [](int) {});
+    events.clear();
+    plain.TakeEvents(events);
+    for (const TrackerEvent& e : events) EXPECT_NE(e.kind, EventKind::kStartSettled) << set;
+  }
+}
+
 // An estimate turned 120° about the palm's normal and 30 mm beside the bottle, claiming σ 2 mm /
 // 1°: every tag corner is gated, and the tags' own fit puts the object where the estimate cannot
 // be. After tag_relocate_images (2) such images the object is put there: the tags then fuse, and

@@ -24,6 +24,8 @@ const char* EventKindName(EventKind kind) {
       return "relocalized";
     case EventKind::kRecovered:
       return "recovered";
+    case EventKind::kStartSettled:
+      return "start_settled";
     case EventKind::kShiftRefused:
       return "shift_refused";
     case EventKind::kContactsGated:
@@ -65,7 +67,7 @@ std::string JointName(int joint, const HandModel& hand) {
 
 bool HasLink(EventKind kind) {
   return kind == EventKind::kContactMade || kind == EventKind::kContactBroken ||
-         kind == EventKind::kContactsGated;
+         kind == EventKind::kContactsGated || kind == EventKind::kStartSettled;
 }
 
 }  // namespace
@@ -120,6 +122,12 @@ std::string EventMessage(const TrackerEvent& e, const HandModel& hand) {
                     "the estimate left a pressing finger in the air; moved %.1f mm to where the "
                     "hand and the image agree",
                     e.value * 1000);
+      break;
+    case EventKind::kStartSettled:
+      std::snprintf(line, sizeof line,
+                    "the start put %s deep inside the object; began %.1f mm away, on the palm's "
+                    "grasp side",
+                    subject.c_str(), e.value * 1000);
       break;
     case EventKind::kShiftRefused:
       std::snprintf(line, sizeof line,

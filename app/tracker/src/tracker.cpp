@@ -21,6 +21,7 @@
 #include "inhand/contacts/bullet_contact_query.hpp"
 #include "inhand/core/error.hpp"
 #include "inhand/filter/joint_samples.hpp"
+#include "inhand/filter/plausibility.hpp"
 
 namespace inhand {
 
@@ -70,6 +71,8 @@ struct Tracker::Impl {
         filter(h, query, p.filter, tracker_detail::FilterOptionsFor(o, m)),
         health(p.health),
         press(h),
+        plausibility(h, query),
+        centre_O(o.Bounds().Center()),
         detector(h, p.health.slip_hold) {
     params.Validate();
     ValidateJointStiffness(h);
@@ -135,7 +138,7 @@ struct Tracker::Impl {
     if (params.joint_clamp_to_limits) ClampToLimits(hand, q_used);
     const double dt = started ? t - last_t : 0.0;
     if (!started) {
-      filter.Reset(start_T_PO, q_used, start_sigmas);
+      Begin(t, tau);
       started = true;
       std::lock_guard<std::mutex> lock(mutex);
       history.Preallocate(hand.num_q(), filter.state());
@@ -163,6 +166,29 @@ struct Tracker::Impl {
     Judge(t, tau);
     std::lock_guard<std::mutex> lock(mutex);
     detector.OnSample(t, filter.trace(), health.health(), events);
+  }
+
+  // The filter's start. A start with a link deep inside the object is first settled onto the
+  // hand, on the palm's grasp side (HandPlausibility::SettleStart), its position's σ widened by
+  // a third of the move, and says so (EventKind::kStartSettled).
+  void Begin(double t, const Eigen::Ref<const Eigen::VectorXd>& tau) {
+    filter.Reset(start_T_PO, q_used, start_sigmas);
+    const HandPlausibility::StartChoice choice =
+        plausibility.SettleStart(modalities.torque ? Eigen::VectorXd(tau) : Eigen::VectorXd(),
+                                 filter.kinematics().link_poses(), start_T_PO, centre_O,
+                                 start_sigmas.position, params.health, params.health.recover_reach);
+    if (choice.hypothesis < 0) return;
+    const double jump = (choice.T_PO.translation() - start_T_PO.translation()).norm();
+    StartSigmas sigmas = start_sigmas;
+    sigmas.position = std::hypot(sigmas.position, jump / 3.0);
+    filter.Reset(choice.T_PO, q_used, sigmas);
+    TrackerEvent e;
+    e.t = t;
+    e.kind = EventKind::kStartSettled;
+    e.subject = choice.link;
+    e.value = jump;
+    std::lock_guard<std::mutex> lock(mutex);
+    events.push_back(e);
   }
 
   // The health at the sample just fused: the press check when due (sets with torques), then
@@ -402,6 +428,8 @@ struct Tracker::Impl {
   VisualMemory memory;   // after last_visual
   HealthMonitor health;  // the caller's
   PressCheck press;
+  HandPlausibility plausibility;  // the start's
+  Vec3 centre_O;                  // the object's bounds' centre
   double next_press_t = 0.0;
   EventDetector detector;  // the caller's
 

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include "inhand/filter/health.hpp"
+#include "inhand/kinematics/kinematics.hpp"
 
 namespace inhand {
 
@@ -36,6 +39,58 @@ HandFingers::HandFingers(const HandModel& hand) {
       if (qi >= 0 && std::find(qs.begin(), qs.end(), qi) == qs.end()) qs.push_back(qi);
     }
   }
+  // The palm's widths along directions spread over a half sphere (a golden spiral): its normal
+  // is the thinnest, its centre the mean of the midpoints between opposite support points. Which
+  // way the normal points cannot come from the configuration of the moment: at the start of a
+  // grasp the fingers are straight, or bent back a little, and their tips lie in the palm's
+  // plane or behind it.
+  constexpr int kDirections = 256;
+  double widest = 0.0;
+  for (std::size_t l = 0; l < links; ++l) {
+    const std::vector<ConvexPiece>& pieces = hand.links[l].collision;
+    if (link_finger[l] >= 0 || pieces.empty()) continue;
+    const auto extent = [&](const Vec3& d) {
+      double e = -std::numeric_limits<double>::infinity();
+      Vec3 at = Vec3::Zero();
+      for (const ConvexPiece& piece : pieces) {
+        const Vec3 s = piece.Support(d);
+        if (s.dot(d) > e) e = s.dot(d), at = s;
+      }
+      return at;
+    };
+    double thinnest = std::numeric_limits<double>::infinity(), width_max = 0.0;
+    Vec3 normal = Vec3::UnitZ(), centre = Vec3::Zero();
+    for (int i = 0; i < kDirections; ++i) {
+      const double z = (i + 0.5) / kDirections;  // the upper half sphere, even in area
+      const double r = std::sqrt(1.0 - z * z), phi = i * M_PI * (3.0 - std::sqrt(5.0));
+      const Vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+      const Vec3 a = extent(d), b = extent(-d);
+      const double width = (a - b).dot(d);
+      centre += 0.5 * (a + b) / kDirections;
+      width_max = std::max(width_max, width);
+      if (width < thinnest) thinnest = width, normal = d;
+    }
+    if (width_max > widest)
+      widest = width_max, palm = static_cast<int>(l), palm_centre_L = centre,
+      palm_normal_L = normal;
+  }
+  if (palm < 0 || tip.empty()) return;
+  Eigen::VectorXd q_mid = Eigen::VectorXd::Zero(hand.num_q());
+  for (int i = 0; i < hand.num_q(); ++i)
+    if (hand.QJoint(i).has_limits) q_mid[i] = 0.5 * (hand.QJoint(i).lower + hand.QJoint(i).upper);
+  KinematicsData kin(hand);
+  kin.Update(hand, q_mid);
+  const Transform T_LP = kin.link_poses()[static_cast<std::size_t>(palm)].inverse();
+  Vec3 tips_L = Vec3::Zero();
+  for (int l : tip) tips_L += T_LP * kin.link_poses()[static_cast<std::size_t>(l)].translation();
+  const double side = (tips_L / tip.size() - palm_centre_L).dot(palm_normal_L);
+  palm_normal_L = side > 0.0 ? palm_normal_L : side < 0.0 ? Vec3(-palm_normal_L) : Vec3::Zero();
+}
+
+std::pair<Vec3, Vec3> HandFingers::GraspSide(const std::vector<Transform>& T_PL) const {
+  if (palm < 0) return {Vec3::Zero(), Vec3::Zero()};
+  const Transform& T = T_PL[static_cast<std::size_t>(palm)];
+  return {T * palm_centre_L, T.linear() * palm_normal_L};
 }
 
 double HandFingers::Torque(int f, const Eigen::Ref<const Eigen::VectorXd>& tau) const {
@@ -129,6 +184,36 @@ Transform HandPlausibility::Settle(const Eigen::Ref<const Eigen::VectorXd>& tau,
     if (delta.norm() < 1e-4) break;
   }
   return T;
+}
+
+HandPlausibility::StartChoice HandPlausibility::SettleStart(
+    const Eigen::Ref<const Eigen::VectorXd>& tau, const std::vector<Transform>& T_PL,
+    const Transform& T_PO, const Vec3& centre_O, double sigma_position, const HealthParams& params,
+    double reach) {
+  StartChoice out;
+  out.T_PO = T_PO;
+  const Plausibility start = Score(tau, T_PL, T_PO, params, reach);
+  out.penetration = start.penetration;
+  out.link = start.penetration_link;
+  const auto [centre_P, normal_P] = fingers_.GraspSide(T_PL);
+  if (out.penetration <= params.penetration || normal_P.isZero()) return out;
+  // Ranked by (implausible, excess if implausible else Mahalanobis²) among those on the grasp
+  // side; ties keep the first.
+  std::pair<bool, double> best{true, 0.0};
+  for (int h = 0; h < 7; ++h) {
+    Transform seed = T_PO;
+    if (h > 0) seed.translation()[(h - 1) / 2] += (h % 2 ? 2.0 : -2.0) * sigma_position;
+    const Transform T = Settle(tau, T_PL, seed, params, reach);
+    const double excess = Score(tau, T_PL, T, params, reach).Excess(params);
+    const bool wrong_side = (T * centre_O - centre_P).dot(normal_P) <= 0.0;
+    const double m2 =
+        (T.translation() - T_PO.translation()).squaredNorm() / (sigma_position * sigma_position);
+    const std::pair<bool, double> key{excess > 0.0, excess > 0.0 ? excess : m2};
+    if (!wrong_side && (out.hypothesis < 0 || key < best))
+      best = key, out.hypothesis = h, out.T_PO = T;
+  }
+  if (out.hypothesis == 0) out.hypothesis = -1, out.T_PO = T_PO;
+  return out;
 }
 
 }  // namespace inhand

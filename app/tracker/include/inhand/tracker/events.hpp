@@ -27,6 +27,9 @@ enum class EventKind {
   kRelocalized,      // the object was put where an image found it; value [m] how far
   kRecovered,        // the estimate left a pressing finger in the air and was moved to a pose
                      // that explains the hand and fits the image; value [m] how far
+  kStartSettled,     // the start put a link deep inside the object and the estimate began from a
+                     // pose on the palm's grasp side instead (HandPlausibility::SettleStart):
+                     // subject that link, value [m] how far it was moved
   kShiftRefused,     // count whole-object shifts of the features' search that the hand refused
   kContactsGated,    // a burst: count contact updates gated over `duration`; subject the link
                      // gated most often; value the largest Mahalanobis distance
@@ -46,7 +49,7 @@ enum class EventKind {
 };
 constexpr int kNumEventKinds = static_cast<int>(EventKind::kNeesBeyondBound) + 1;
 // "contact_made", "contact_broken", "grip_loosened", "features_lost", "features_found",
-// "tags_elsewhere", "relocalized", "recovered", "shift_refused", "contacts_gated",
+// "tags_elsewhere", "relocalized", "recovered", "start_settled", "shift_refused", "contacts_gated",
 // "vision_gated", "samples_dropped", "samples_rejected", "image_dropped", "image_rejected",
 // "image_late", "health", "nees_beyond_bound".
 const char* EventKindName(EventKind kind);
