@@ -223,6 +223,34 @@ TEST(HandFingers, ThePalmsGraspSideIsWhereTheFingersClose) {
   }
 }
 
+// Third-party hands: the Allegro's palm faces +x of its base link (its fingers point along +z
+// and curl toward +x), the Barrett's +z (its fingers rise from the palm and close over it). The
+// Shadow hand's URDF hangs every link from its wrist joints, which makes it one finger here:
+// no grasp side, so a start inside the object is left to the filter.
+TEST(HandFingers, ThirdPartyPalmsFaceWhereTheirFingersClose) {
+  INHAND_REQUIRE_SHARED_ASSETS();
+  const std::string hands = test::SharedAssets() + "/hands/";
+  struct Case {
+    const char* urdf;
+    const char* palm;
+    Vec3 normal;
+  };
+  for (const Case& c : {Case{"allegro_hand/allegro_hand_right.urdf", "base_link", Vec3::UnitX()},
+                        Case{"allegro_hand/allegro_hand_left.urdf", "base_link", Vec3::UnitX()},
+                        Case{"allegro_hand_description/allegro_hand_description_right.urdf",
+                             "base_link", Vec3::UnitX()},
+                        Case{"barrett_hand/bhand_model.urdf", "base_link", Vec3::UnitZ()}}) {
+    const HandModel hand = LoadHandModel(hands + c.urdf, {{}, false});
+    const HandFingers fingers(hand);
+    ASSERT_GE(fingers.palm, 0) << c.urdf;
+    EXPECT_EQ(hand.links[static_cast<std::size_t>(fingers.palm)].name, c.palm) << c.urdf;
+    EXPECT_GT(fingers.palm_normal_L.dot(c.normal), std::cos(15.0 * M_PI / 180.0)) << c.urdf;
+  }
+  const HandFingers shadow(LoadHandModel(hands + "shadow_hand/shadow_hand_left.urdf", {{}, false}));
+  EXPECT_EQ(shadow.size(), 1);
+  EXPECT_TRUE(shadow.palm_normal_L.isZero());
+}
+
 // A start with the palm deep inside the bottle and the bottle's centre just behind the palm's
 // middle: settled by itself it leaves through the back of the palm. SettleStart puts it on the
 // grasp side, with nothing inside, nearer the pose it came from. A start with nothing deep inside,

@@ -74,7 +74,12 @@ HandFingers::HandFingers(const HandModel& hand) {
       widest = width_max, palm = static_cast<int>(l), palm_centre_L = centre,
       palm_normal_L = normal;
   }
-  if (palm < 0 || tip.empty()) return;
+  // A hand whose links all hang from one joint (a wrist, as the Shadow hand's URDF has) is one
+  // finger here, and its "palm" a forearm: no grasp side.
+  if (palm < 0 || tip.size() < 2) {
+    palm_normal_L.setZero();
+    return;
+  }
   Eigen::VectorXd q_mid = Eigen::VectorXd::Zero(hand.num_q());
   for (int i = 0; i < hand.num_q(); ++i)
     if (hand.QJoint(i).has_limits) q_mid[i] = 0.5 * (hand.QJoint(i).lower + hand.QJoint(i).upper);

@@ -25,7 +25,8 @@ struct HandFingers {
   // collision geometry's centre and its grasp side's normal, in its link frame: the direction in
   // which that geometry is thinnest, signed toward the fingertips' mean with every joint in the
   // middle of its range (a half-closed hand; joints without limits at 0). Zero when the
-  // fingertips lie in the palm's plane there.
+  // fingertips lie in the palm's plane there, or when the hand has fewer than two fingers (a
+  // wrist joint above every link makes the whole hand one finger).
   int palm = -1;
   Vec3 palm_centre_L = Vec3::Zero();
   Vec3 palm_normal_L = Vec3::Zero();
