@@ -178,7 +178,15 @@ int PrintObject(const ObjectModel& obj, bool as_json) {
         {"contact_field", field_json},
         {"triangles", obj.NumVisualTriangles()},
         {"mesh_files", obj.mesh_files},
-        {"tags", tags}};
+        {"tags", tags},
+        {"symmetry",
+         obj.symmetry_axis_O.isZero()
+             ? Json(nullptr)
+             : Json{{"axis",
+                     {obj.symmetry_axis_O.x(), obj.symmetry_axis_O.y(), obj.symmetry_axis_O.z()}},
+                    {"point",
+                     {obj.symmetry_point_O.x(), obj.symmetry_point_O.y(),
+                      obj.symmetry_point_O.z()}}}}};
     std::cout << out.dump(2) << "\n";
     return 0;
   }
@@ -208,6 +216,12 @@ int PrintObject(const ObjectModel& obj, bool as_json) {
   for (const TagPlacement& t : obj.tags)
     std::cout << "\n  " << t.family << " id " << t.id << ", " << std::setprecision(1)
               << t.size * 1000.0 << " mm";
+  if (!obj.symmetry_axis_O.isZero())
+    std::cout << std::setprecision(3) << "\nlooks the same turned about the axis ("
+              << obj.symmetry_axis_O.x() << ", " << obj.symmetry_axis_O.y() << ", "
+              << obj.symmetry_axis_O.z() << ") through (" << obj.symmetry_point_O.x() << ", "
+              << obj.symmetry_point_O.y() << ", " << obj.symmetry_point_O.z()
+              << ") m: images measure no such turn";
   std::cout << std::defaultfloat << "\n" << obj.mesh_files.size() << " mesh files:\n";
   for (const std::string& f : obj.mesh_files) std::cout << "  " << f << "\n";
   return 0;

@@ -547,6 +547,7 @@ def pen():
         "description": "Ballpoint pen: 11 mm barrel, 145 mm long, no tags (too thin)",
         "visual": [{"mesh": "pen.obj"}],
         "collision": [{"mesh": "pen_pieces.obj", "method": "components"}],
+        "symmetry": {"axis": [1, 0, 0]},
         "mass": 0.016, "friction": 0.5,
         "tags": [],
     })

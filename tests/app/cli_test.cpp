@@ -516,17 +516,23 @@ TEST(Cli, AHardRunThatLeavesThePressingFingersRecovers) {
 }
 
 // The second failure, on seeds nobody tuned on: a `paper` pen run (seed 229) whose first
-// whole-object search moves the estimate 76 mm onto the book's long edge while the pen still lies
-// on the book; when the fingers close on the real pen, their torques could not pull it back and
-// it ended 76 mm off, saying nothing. Now the pressing fingers, 50 mm and more from the estimate,
-// start a recovery (82 -> 58 mm at 2.9 s) and the features that follow bring it to 21 mm. Its
-// roll about its own axis stays unobserved (60 deg at the end), and the set says so: not `ok`.
+// whole-object search moved the estimate 76 mm onto the book's long edge while the pen still lay
+// on the book; when the fingers closed on the real pen, their torques could not pull it back and
+// it ended 76 mm off, saying nothing. The pressing fingers' recovery then brought it back to 21 mm
+// (82 mm off at 2.8 s, RMS 55 mm over the run). Since the pen declares its symmetry about its axis
+// (docs/estimator.md, "A turn no image shows"), corners on its rims no longer turn it, the jumps
+// onto the book are refused (4 shifts), and it never gets farther off than its 25 mm start: it
+// ends 6.7 mm off, RMS 10.5 mm. Either way the jump may not stand: refused, or recovered with an
+// alarm. Its roll about its own axis stays unobserved (55 deg at the end), and the set says so:
+// not `ok`.
 TEST(Cli, APaperPenPutOnTheBookIsRecoveredByThePressingFingers) {
   const Json m = JtfSummaryOf("pen-fingertip", "paper", 229);
   if (HasFailure()) return;
   EXPECT_LE(m.at("terminal_position_error_mm").get<double>(), 30.0);
-  EXPECT_GE(m.at("recoveries").get<int>(), 1);
-  ASSERT_GE(m.at("health_alarms").get<int>(), 1);
+  EXPECT_LE(m.at("rms_position_error_mm").get<double>(), 30.0);
+  const bool recovered =
+      m.at("recoveries").get<int>() >= 1 && m.at("health_alarms").get<int>() >= 1;
+  EXPECT_TRUE(recovered || m.at("shifts_refused").get<int>() >= 1);
   if (m.at("terminal_orientation_error_deg").get<double>() > 30.0) {
     EXPECT_NE(m.at("health_final").get<std::string>(), "ok");
   }

@@ -116,7 +116,39 @@ TEST(Objects, BadDescriptionsNameFileAndField) {
       "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
       "\"inertia\": {\"ixx\": 1, \"iyy\": 1, \"izz\": 1, \"ixy\": 2}}",
       "field 'inertia' is not positive definite");
+  expect(
+      "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+      "\"symmetry\": {\"axis\": [0, 0, 0]}}",
+      "field 'symmetry.axis'");
+  expect(
+      "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+      "\"symmetry\": {\"axis\": [1, 0, 0], \"centre\": [0, 0, 0]}}",
+      "unknown key 'centre'");
+  expect(
+      "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+      "\"symmetry\": {\"axis\": [0, 0, 1]}, \"tags\": [{\"id\": 1, \"size\": 0.02, \"pose\": "
+      "{\"xyz\": [0, 0, 0.5]}}]}",
+      "no symmetry on an object with tags");
   EXPECT_THROW(LoadObjectModel(dir / "cube.obj"), InputError);  // not a description
+}
+
+// A declared continuous symmetry: the pen's own axis; an axis of any length, and its point.
+TEST(Objects, ASymmetryIsItsUnitAxisThroughItsPoint) {
+  const ObjectModel pen = LoadObjectModel(test::ProjectAsset("objects/pen/object.json"));
+  EXPECT_EQ(pen.symmetry_axis_O, Vec3::UnitX());
+  EXPECT_EQ(pen.symmetry_point_O, Vec3::Zero());
+  for (const char* bottle : {"ketchup_bottle", "water_bottle", "shampoo_bottle", "brush"})
+    EXPECT_TRUE(
+        LoadObjectModel(test::ProjectAsset(std::string("objects/") + bottle + "/object.json"))
+            .symmetry_axis_O.isZero())
+        << bottle << " carries tags";
+  test::TempDir dir;
+  dir.Write("o.json",
+            "{\"name\": \"x\", \"visual\": [], \"collision\": [{\"box\": [1, 1, 1]}], \"mass\": 1, "
+            "\"symmetry\": {\"axis\": [0, 3, 4], \"point\": [0.1, 0, 0]}}");
+  const ObjectModel o = LoadObjectModel(dir / "o.json");
+  EXPECT_NEAR((o.symmetry_axis_O - Vec3(0, 0.6, 0.8)).norm(), 0.0, 1e-15);
+  EXPECT_EQ(o.symmetry_point_O, Vec3(0.1, 0, 0));
 }
 
 TEST(Objects, YcbUrdfObjectsUseTheirStoredDecomposition) {

@@ -210,6 +210,7 @@ void ExtractedFeatures::Inliers(const MatchResult& match, const Transform& T_PC,
       const Vec3 g_C = T_PC.inverse() * (f.T_PO() * g);
       if (g_C.z() > 1e-6) {
         feature.pixel += K.Project(g_C) - K.Project(T_PC.inverse() * X_P);
+        feature.on_outline = g != feature.x_O;  // GrazingPoint returns its start when it fails
         feature.x_O = g;
       }
     }

@@ -36,6 +36,8 @@ FilterOptions FilterOptionsFor(const ObjectModel& object, const Modalities& m) {
   FilterOptions options;
   options.use_torque = m.torque;
   options.gyration_O = object.inertia_com / object.mass;  // for FilterParams::travel_orientation
+  options.symmetry_axis_O = object.symmetry_axis_O;
+  options.symmetry_point_O = object.symmetry_point_O;
   return options;
 }
 

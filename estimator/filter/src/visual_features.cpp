@@ -1,7 +1,9 @@
 // Visual features (paper Sec. III-C): the pixel of an object point, tag corner or extracted
 // feature alike, seen by the camera. h = π(K, T_CP (p + R x_O)), r = z - h, H = [∂h/∂(δp, δθ),
 // 0 (biases), ∂h/∂ξ (camera error, when estimated)], R = σ_px² I, gated by χ²₂. Features are
-// fused one by one at one linearisation point and applied together (one retraction per frame).
+// fused one by one at one linearisation point and applied together (one retraction per frame). On
+// an object with a continuous symmetry, a feature off the outline measures only across the pixel
+// direction in which a turn about it moves the feature (ProjectOutSymmetry).
 #include <cmath>
 
 #include "inhand/filter/filter.hpp"
@@ -19,6 +21,7 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
   const Mat3 Rc_T = T_PC.linear().transpose();
   const Eigen::Matrix2d Rv =
       Eigen::Matrix2d::Identity() * (params_.pixel_sigma * params_.pixel_sigma);
+  const bool symmetric = !options_.symmetry_axis_O.isZero();
   int used = 0;
   for (const VisualFeature& f : features) {
     FilterTrace::Visual rec;
@@ -36,7 +39,8 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
     rec.depth = X_C.z();
     H2_.leftCols<6>() = VisualMeasurementJacobian(X, s_.p, T_PC, K);
     if (camera_state_) H2_.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
-    const Eigen::Vector2d r = f.pixel - rec.predicted;
+    Eigen::Vector2d r = f.pixel - rec.predicted;
+    if (symmetric && !f.on_outline) ProjectOutSymmetry(r);
     rec.gated =
         Update<2>(r, H2_, Rv, params_.visual_gate_chi2, &rec.mahalanobis) != Outcome::kApplied;
     if (!rec.gated) CapVisualInformation(Rv);
@@ -46,6 +50,27 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
   Commit();
   RefreshKinematics();
   return used;
+}
+
+// A turn of the object about its symmetry axis (FilterOptions::symmetry_axis_O) changes no image:
+// in the error state it is the motion v = (δp, δθ) = (-a × R c_O, a), with a the axis in P and c_O
+// a point on it, and it moves the feature's predicted pixel along u = H v. Where along that turn
+// the matched point lies is the matcher's choice among points that all look alike (a corner on a
+// rim of the barrel), not a measurement: r and H keep only their components across u, so that
+// H v = 0, and the feature measures one direction instead of two, none of it along v. Not for a
+// point on the outline (VisualFeature::on_outline): the grazing point already moves along the line
+// of sight with the turn, so u is only what the grazing walk's tolerance leaves, and it points
+// across the outline, the one direction such a feature measures.
+void Filter::ProjectOutSymmetry(Eigen::Vector2d& r) {
+  const Vec3 a = s_.R * options_.symmetry_axis_O.normalized();
+  Vec6 v;
+  v << -a.cross(s_.R * options_.symmetry_point_O), a;
+  const Eigen::Vector2d u = H2_.leftCols<6>() * v;
+  const double uu = u.squaredNorm();
+  if (!(uu > 1e-18)) return;  // a point on the axis
+  const Eigen::Matrix2d across = Eigen::Matrix2d::Identity() - u * u.transpose() / uu;
+  r = across * r;
+  H2_ = across * H2_;
 }
 
 // visual_model_sigma: the variance of a feature's predicted pixel (the mean over its two axes) may

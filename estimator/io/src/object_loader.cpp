@@ -175,6 +175,21 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
     }
   }
 
+  if (root.Has("symmetry")) {
+    const jsonf::Field sym = root["symmetry"];
+    if (!sym.value.is_object()) sym.Fail("an object with \"axis\" and optionally \"point\"");
+    for (auto it = sym.value.begin(); it != sym.value.end(); ++it)
+      if (it.key() != "axis" && it.key() != "point")
+        throw InputError(sym.Where() + ": unknown key '" + it.key() +
+                         "', expected \"axis\" or \"point\"");
+    const Vec3 axis = sym["axis"].Vector3();
+    if (!(axis.norm() > 1e-9)) sym["axis"].Fail("a direction (three numbers, not all zero)");
+    if (!obj.tags.empty())
+      sym.Fail("no symmetry on an object with tags (a tag shows every turn of the object)");
+    obj.symmetry_axis_O = axis.normalized();
+    if (sym.Has("point")) obj.symmetry_point_O = sym["point"].Vector3();
+  }
+
   ContactFieldOptions field;
   if (root.Has("contact_field")) {
     const jsonf::Field c = root["contact_field"];

@@ -39,6 +39,11 @@ struct ObjectModel {
   Mat3 inertia_com = Mat3::Identity();  // [kg m²] about the centre of mass, O axes
   double friction = 0.8;                // Coulomb coefficient against the fingers
   std::vector<TagPlacement> tags;
+  // A continuous symmetry of the object's appearance: turned about this axis (through
+  // symmetry_point_O), the object looks the same, as a plain pen does about its own axis. No
+  // image measures such a turn (docs/estimator.md, "Vision"). Zero axis: none declared.
+  Vec3 symmetry_axis_O = Vec3::Zero();   // unit
+  Vec3 symmetry_point_O = Vec3::Zero();  // [m]
 
   std::size_t NumVisualTriangles() const;
   Aabb Bounds() const;  // of the visual meshes

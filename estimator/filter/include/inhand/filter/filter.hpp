@@ -77,6 +77,9 @@ struct VisualFeature {
   int id = -1;
   Vec3 x_O = Vec3::Zero();    // the feature's point on the object, object frame [m]
   Vec2 pixel = Vec2::Zero();  // measured pixel, undistorted [px]
+  // x_O is where the line of sight grazes the surface (an extracted corner on the object's
+  // outline): a turn about a symmetry axis moves it along the line of sight.
+  bool on_outline = false;
 };
 
 // The standard deviations the filter starts with (docs/estimator.md, "State").
@@ -96,6 +99,10 @@ struct FilterOptions {
   // The object's gyration tensor (inertia about its centre of mass / mass, object axes [m²]):
   // the metric of FilterParams::travel_orientation. Zero (not known): that noise is off.
   Mat3 gyration_O = Mat3::Zero();
+  // The object's continuous symmetry (ObjectModel::symmetry_axis_O): an image feature then
+  // measures nothing along the pixel direction a turn about it moves the feature in. Zero: none.
+  Vec3 symmetry_axis_O = Vec3::Zero();
+  Vec3 symmetry_point_O = Vec3::Zero();
 };
 
 // A contact that moves the object with its finger in Predict: its point fixed on the link.
@@ -216,6 +223,7 @@ class Filter {
   void KeepPushDirections();
   void CapContactInformation(double var);  // contact_model_sigma, after a normal-only constraint
   void CapVisualInformation(const Eigen::Matrix2d& R);  // visual_model_sigma, after a feature
+  void ProjectOutSymmetry(Eigen::Vector2d& r);  // r and H2_ across a symmetric turn's pixel motion
   double CandidateWeight(double distance) const;
   // inv_weight_[i] = 1 / weight of candidate i relative to its finger's nearest candidate.
   void ComputeCandidateWeights();
