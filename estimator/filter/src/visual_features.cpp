@@ -21,7 +21,13 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
   const Mat3 Rc_T = T_PC.linear().transpose();
   const Eigen::Matrix2d Rv =
       Eigen::Matrix2d::Identity() * (params_.pixel_sigma * params_.pixel_sigma);
-  const bool symmetric = !options_.symmetry_axis_O.isZero();
+  // The symmetric turn in the error state, the same for every feature of the frame (one
+  // linearisation point); zero when the object declares no symmetry.
+  Vec6 turn = Vec6::Zero();
+  if (!options_.symmetry_axis_O.isZero()) {
+    const Vec3 a = s_.R * options_.symmetry_axis_O.normalized();
+    turn << -a.cross(s_.R * options_.symmetry_point_O), a;
+  }
   int used = 0;
   for (const VisualFeature& f : features) {
     FilterTrace::Visual rec;
@@ -40,7 +46,7 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
     H2_.leftCols<6>() = VisualMeasurementJacobian(X, s_.p, T_PC, K);
     if (camera_state_) H2_.rightCols<6>() = CameraPoseJacobian(X, T_PC, K);
     Eigen::Vector2d r = f.pixel - rec.predicted;
-    if (symmetric && !f.on_outline) ProjectOutSymmetry(r);
+    if (!turn.isZero() && !f.on_outline) ProjectOutSymmetry(turn, r);
     rec.gated =
         Update<2>(r, H2_, Rv, params_.visual_gate_chi2, &rec.mahalanobis) != Outcome::kApplied;
     if (!rec.gated) CapVisualInformation(Rv);
@@ -54,17 +60,14 @@ int Filter::UpdateVisual(const std::vector<VisualFeature>& features, const Trans
 
 // A turn of the object about its symmetry axis (FilterOptions::symmetry_axis_O) changes no image:
 // in the error state it is the motion v = (δp, δθ) = (-a × R c_O, a), with a the axis in P and c_O
-// a point on it, and it moves the feature's predicted pixel along u = H v. Where along that turn
-// the matched point lies is the matcher's choice among points that all look alike (a corner on a
-// rim of the barrel), not a measurement: r and H keep only their components across u, so that
-// H v = 0, and the feature measures one direction instead of two, none of it along v. Not for a
-// point on the outline (VisualFeature::on_outline): the grazing point already moves along the line
-// of sight with the turn, so u is only what the grazing walk's tolerance leaves, and it points
-// across the outline, the one direction such a feature measures.
-void Filter::ProjectOutSymmetry(Eigen::Vector2d& r) {
-  const Vec3 a = s_.R * options_.symmetry_axis_O.normalized();
-  Vec6 v;
-  v << -a.cross(s_.R * options_.symmetry_point_O), a;
+// a point on it (UpdateVisual's `turn`), and it moves the feature's predicted pixel along u = H v.
+// Where along that turn the matched point lies is the matcher's choice among points that all look
+// alike (a corner on a rim of the barrel), not a measurement: r and H keep only their components
+// across u, so that H v = 0, and the feature measures one direction instead of two, none of it
+// along v. Not for a point on the outline (VisualFeature::on_outline): the grazing point already
+// moves along the line of sight with the turn, so u is only what the grazing walk's tolerance
+// leaves, and it points across the outline, the one direction such a feature measures.
+void Filter::ProjectOutSymmetry(const Vec6& v, Eigen::Vector2d& r) {
   const Eigen::Vector2d u = H2_.leftCols<6>() * v;
   const double uu = u.squaredNorm();
   if (!(uu > 1e-18)) return;  // a point on the axis

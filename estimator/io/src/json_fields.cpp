@@ -1,5 +1,6 @@
 #include "inhand/io/detail/json_fields.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -21,6 +22,18 @@ void Field::Fail(const std::string& expected) const {
                                         : value.dump();
   if (got.size() > 60) got = got.substr(0, 57) + "...";
   throw InputError(Where() + " is " + got + ", expected " + expected);
+}
+
+void Field::ExpectKeys(std::initializer_list<const char*> keys) const {
+  std::string list;
+  for (auto k = keys.begin(); k != keys.end(); ++k) {
+    if (k != keys.begin()) list += k + 1 == keys.end() ? " or " : ", ";
+    list += "\"" + std::string(*k) + "\"";
+  }
+  if (!value.is_object()) Fail("an object with " + list);
+  for (auto it = value.begin(); it != value.end(); ++it)
+    if (std::find(keys.begin(), keys.end(), it.key()) == keys.end())
+      throw InputError(Where() + ": unknown key '" + it.key() + "', expected " + list);
 }
 
 bool Field::Has(const std::string& key) const { return value.is_object() && value.contains(key); }

@@ -177,11 +177,7 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
 
   if (root.Has("symmetry")) {
     const jsonf::Field sym = root["symmetry"];
-    if (!sym.value.is_object()) sym.Fail("an object with \"axis\" and optionally \"point\"");
-    for (auto it = sym.value.begin(); it != sym.value.end(); ++it)
-      if (it.key() != "axis" && it.key() != "point")
-        throw InputError(sym.Where() + ": unknown key '" + it.key() +
-                         "', expected \"axis\" or \"point\"");
+    sym.ExpectKeys({"axis", "point"});
     const Vec3 axis = sym["axis"].Vector3();
     if (!(axis.norm() > 1e-9)) sym["axis"].Fail("a direction (three numbers, not all zero)");
     if (!obj.tags.empty())
@@ -193,11 +189,7 @@ ObjectModel LoadObjectJson(const std::string& path, const PackageMap& packages,
   ContactFieldOptions field;
   if (root.Has("contact_field")) {
     const jsonf::Field c = root["contact_field"];
-    if (!c.value.is_object()) c.Fail("an object with \"source\", \"spacing\" or \"padding\"");
-    for (auto it = c.value.begin(); it != c.value.end(); ++it)
-      if (it.key() != "source" && it.key() != "spacing" && it.key() != "padding")
-        throw InputError(c.Where() + ": unknown key '" + it.key() +
-                         "', expected \"source\", \"spacing\" or \"padding\"");
+    c.ExpectKeys({"source", "spacing", "padding"});
     if (c.Has("source")) field.source = c["source"].String();
     if (c.Has("spacing")) field.params.spacing = c["spacing"].PositiveNumber();
     if (c.Has("padding")) field.params.padding = c["padding"].NonNegativeNumber();

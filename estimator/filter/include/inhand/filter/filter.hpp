@@ -223,7 +223,7 @@ class Filter {
   void KeepPushDirections();
   void CapContactInformation(double var);  // contact_model_sigma, after a normal-only constraint
   void CapVisualInformation(const Eigen::Matrix2d& R);  // visual_model_sigma, after a feature
-  void ProjectOutSymmetry(Eigen::Vector2d& r);  // r and H2_ across a symmetric turn's pixel motion
+  void ProjectOutSymmetry(const Vec6& turn, Eigen::Vector2d& r);  // r, H2_ across H2_ turn
   double CandidateWeight(double distance) const;
   // inv_weight_[i] = 1 / weight of candidate i relative to its finger's nearest candidate.
   void ComputeCandidateWeights();

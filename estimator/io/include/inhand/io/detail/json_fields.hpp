@@ -2,6 +2,7 @@
 // Internal (io, sessions, app): typed access to JSON fields with messages that name the file
 // and the field path, e.g. "object.json: field 'tags[0].size': expected a number > 0".
 // Not part of the estimator's public API: it exposes nlohmann::json.
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -21,6 +22,9 @@ struct Field {
   std::string Where() const;  // "FILE: field 'PATH'"
   [[noreturn]] void Fail(const std::string& expected) const;
 
+  // An object whose keys are all among `keys`; else fails naming them ("an object with "a", "b"
+  // or "c"", "unknown key 'k', expected "a", "b" or "c"").
+  void ExpectKeys(std::initializer_list<const char*> keys) const;
   bool Has(const std::string& key) const;
   Field operator[](const std::string& key) const;  // throws when missing
   Field At(std::size_t index) const;
