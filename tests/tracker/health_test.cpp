@@ -367,7 +367,7 @@ TEST(ClaimedCovariance, WidensThePositionByTheDistanceTheHealthSees) {
       const Health h{state, cause, cause == HealthCause::kVisionDisagrees ? 0.8 : 0.034,
                      3,     1.0,   0.034};
       EXPECT_DOUBLE_EQ(HealthPositionSigma(h), 0.034);
-      const Mat6 C = ClaimedPoseCovariance(P, h);
+      const Mat6 C = ClaimedPoseCovariance(P, h, Mat3::Identity(), Mat3::Zero());  // Γ not known
       Mat6 expected = P;
       expected.topLeftCorner<3, 3>() += 0.034 * 0.034 * Mat3::Identity();
       EXPECT_EQ(C, expected);
@@ -391,7 +391,65 @@ TEST(ClaimedCovariance, WidensThePositionByTheDistanceTheHealthSees) {
       {HealthState::kLost, HealthCause::kFeaturesLost, 0.0, -1, 0.0}};
   for (const Health& h : quiet) {
     EXPECT_EQ(HealthPositionSigma(h), 0.0);
-    EXPECT_EQ(ClaimedPoseCovariance(P, h), P);
+    EXPECT_EQ(ClaimedPoseCovariance(P, h, Mat3::Identity(), Mat3::Zero()), P);
+    EXPECT_EQ(ClaimedPoseCovariance(P, h, Mat3::Identity(), 1e-3 * Mat3::Identity()), P);
+  }
+}
+
+// The same distance s as a turn: about each principal axis of the object's gyration tensor, the
+// claim adds the variance of the turn that moves the object's points by s (RMS), here measured on
+// points drawn uniformly inside a solid cylinder (radius 20 mm, length 150 mm, its axis along a
+// random direction of O) rather than read from the tensor; a turn beyond π²/3 is capped there (a
+// 5 mm pen's own axis).
+TEST(ClaimedCovariance, WidensTheOrientationByTheTurnThatMovesTheObjectAsFar) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  const auto random_rotation = [&] {
+    return Mat3(Quat(normal(rng), normal(rng), normal(rng), normal(rng)).normalized());
+  };
+  const Mat3 Q = random_rotation();  // the cylinder's axes in O
+  const Mat3 R_PO = random_rotation();
+  const auto cylinder = [&](double r, double length) {
+    const Vec3 g(r * r / 2, r * r / 4 + length * length / 12, r * r / 4 + length * length / 12);
+    return Mat3(Q * g.asDiagonal() * Q.transpose());
+  };
+  Mat6 P = Mat6::Zero();
+  P.diagonal() << 1e-6, 2e-6, 3e-6, 1e-4, 2e-4, 3e-4;
+  const double s = 0.020;
+  const Health lost{HealthState::kLost, HealthCause::kPressingInAir, s, 3, 1.0, s};
+  {
+    const double r = 0.020, length = 0.150;
+    const Mat6 C = ClaimedPoseCovariance(P, lost, R_PO, cylinder(r, length));
+    EXPECT_EQ(C, C.transpose());
+    const Mat3 position = P.topLeftCorner<3, 3>() + s * s * Mat3::Identity();
+    EXPECT_EQ(Mat3(C.topLeftCorner<3, 3>()), position);
+    EXPECT_EQ(Mat3(C.topRightCorner<3, 3>()), Mat3(P.topRightCorner<3, 3>()));
+    std::vector<Vec3> points;  // uniform inside the cylinder, O axes about its centre
+    while (points.size() < 20000) {
+      const Vec3 c(uniform(rng) * length / 2, uniform(rng) * r, uniform(rng) * r);
+      if (c.tail<2>().norm() <= r) points.push_back(Q * c);
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      const Vec3 e_O = Q.col(axis);
+      double moved = 0.0;  // mean squared displacement of the points per unit turn about e_O
+      for (const Vec3& x : points) moved += e_O.cross(x).squaredNorm();
+      const double turn = s / std::sqrt(moved / points.size());  // moves them by s, RMS
+      const Vec3 e_P = R_PO * e_O;
+      const double added = e_P.dot((C - P).bottomRightCorner<3, 3>() * e_P);
+      EXPECT_NEAR(added, turn * turn, 0.03 * turn * turn) << "axis " << axis;
+      // That turn, however small the filter's own σ, has a NEES of about 1 (the sampled turn is
+      // within 3 % of the tensor's).
+      Vec6 err = Vec6::Zero();
+      err.tail<3>() = turn * e_P;
+      EXPECT_LT(err.dot(C.ldlt().solve(err)), 1.03);
+      EXPECT_GT(err.dot(P.ldlt().solve(err)), 100.0);
+    }
+  }
+  {  // A pen: s moves its points by far more than any turn about its own axis does.
+    const Mat6 C = ClaimedPoseCovariance(P, lost, R_PO, cylinder(0.005, 0.140));
+    const Vec3 axis_P = R_PO * Q.col(0);
+    EXPECT_NEAR(axis_P.dot((C - P).bottomRightCorner<3, 3>() * axis_P), M_PI * M_PI / 3, 1e-12);
   }
 }
 

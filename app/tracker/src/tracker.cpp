@@ -522,7 +522,9 @@ const TrackerParams& Tracker::params() const { return impl_->params; }
 const Health& Tracker::health() const { return impl_->health.health(); }
 const PressEvidence& Tracker::press_evidence() const { return impl_->health.press(); }
 Mat6 Tracker::claimed_pose_covariance() const {
-  return ClaimedPoseCovariance(impl_->filter.covariance().topLeftCorner<6, 6>(), health());
+  const Filter& f = impl_->filter;
+  return ClaimedPoseCovariance(f.covariance().topLeftCorner<6, 6>(), health(), f.T_PO().linear(),
+                               f.options().gyration_O);
 }
 
 void Tracker::TakeEvents(std::vector<TrackerEvent>& out) {

@@ -1,5 +1,6 @@
 #include "inhand/filter/health.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -59,10 +60,23 @@ double HealthPositionSigma(const Health& h) {
   return std::isfinite(h.distance) ? std::abs(h.distance) : 0.0;
 }
 
-Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health) {
+Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health, const Mat3& R_PO,
+                           const Mat3& gyration_O) {
   const double s = HealthPositionSigma(health);
   Mat6 claimed = P;
+  if (s <= 0.0) return claimed;
   claimed.topLeftCorner<3, 3>().diagonal().array() += s * s;
+  if (gyration_O.isZero(0.0)) return claimed;
+  constexpr double kUniform = M_PI * M_PI / 3.0;  // the variance of an angle uniform on a circle
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (gyration_O + gyration_O.transpose()));
+  Vec3 turn;
+  for (int i = 0; i < 3; ++i) {
+    const double g = eig.eigenvalues()[i];
+    turn[i] = g > 0.0 ? std::min(s * s / g, kUniform) : kUniform;
+  }
+  const Mat3 V = R_PO * eig.eigenvectors();
+  const Mat3 C = V * turn.asDiagonal() * V.transpose();
+  claimed.bottomRightCorner<3, 3>() += 0.5 * (C + C.transpose());  // exactly symmetric
   return claimed;
 }
 

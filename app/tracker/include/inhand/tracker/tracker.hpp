@@ -239,7 +239,8 @@ class Tracker {
   const Health& health() const;
   // The pose covariance (δp, δθ) the estimate claims: the filter's, widened by what its health
   // knows (ClaimedPoseCovariance: a pressing finger in the air or a link inside the object at
-  // distance d adds d² to the position's variance on every axis). What σ, NEES and the HUD report.
+  // distance d adds d² to the position's variance on every axis, and the turn that moves the
+  // object's points by d to the orientation's). What σ, NEES and the HUD report.
   Mat6 claimed_pose_covariance() const;
   const PressEvidence& press_evidence() const;
   const Modalities& modalities() const;

@@ -76,11 +76,16 @@ std::string HealthMessage(const Health& health, const HandModel& hand);
 // refuses most of what the images measure, which lies v away at the object's depth, knows its
 // estimate is about that far off; its claim must not be tighter. HealthPositionSigma is that
 // distance [m] (Health::distance: g, d or v), 0 for every other state and cause.
-// ClaimedPoseCovariance is the filter's pose covariance (δp, δθ) with HealthPositionSigma² added to
-// the position's variance along every axis: what the tracker reports (σ, NEES, the HUD, exports).
-// The filter's own covariance, and so every estimate, stays as it was.
+// ClaimedPoseCovariance is the filter's pose covariance (δp, δθ) with that distance s added twice:
+// s² to the position's variance along every axis, and, as a turn, s²/γᵢ about each principal axis
+// of the object's gyration tensor Γ = Σ γᵢ eᵢeᵢᵀ (`gyration_O`, O axes; R_PO turns it into P),
+// at most π²/3 (an angle no better known than uniform): a turn by θ about eᵢ moves the object's
+// points by θ√γᵢ on average, so s is as much a turn as a shift. Γ zero (not known): the position
+// only. What the tracker reports (σ, NEES, the HUD, exports). The filter's own covariance, and
+// so every estimate, stays as it was.
 double HealthPositionSigma(const Health& health);
-Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health);
+Mat6 ClaimedPoseCovariance(const Mat6& P, const Health& health, const Mat3& R_PO,
+                           const Mat3& gyration_O);
 
 // Thresholds, with units; why each default is what it is in docs/evaluation.md ("Health").
 struct HealthParams {
