@@ -808,9 +808,10 @@ PYBIND11_MODULE(inhand, m) {
       .def(
           "claimed_pose_covariance",
           [](PyTracker& t) -> Mat6 { return t.tracker().claimed_pose_covariance(); },
-          "The covariance of (position, orientation) the estimate claims (6x6): the filter's, its "
-          "position widened by what the health knows (a pressing finger in the air, a link inside "
-          "the object). What sigma, NEES and the HUD report.")
+          "The covariance of (position, orientation) the estimate claims (6x6): the filter's, "
+          "widened by what the health knows (a pressing finger in the air, a link inside the "
+          "object: that distance on the position, and as the turn that moves the object's points "
+          "as far on the orientation). What sigma, NEES and the HUD report.")
       .def(
           "biases", [](PyTracker& t) -> Eigen::VectorXd { return t.tracker().biases(); },
           "Joint position biases [rad].")
