@@ -101,6 +101,8 @@ std::string LiveTracking::OnJointState(const JointStateMsg& m, const std::string
     for (auto& tracker : trackers_) tracker->Start(T(stamp), *start, options_.start_sigmas);
     started_ = true;
   }
+  std::string waited;
+  if (waiting_ && stamp - waiting_->header.stamp_ns > kTfWait) waited = ReleaseWaiting();
   const double t = T(stamp);
   for (std::size_t i = 0; i < trackers_.size(); ++i) {
     Tracker& tracker = *trackers_[i];
@@ -121,7 +123,7 @@ std::string LiveTracking::OnJointState(const JointStateMsg& m, const std::string
     last_health_[i] = p.health;
     poses.push_back(std::move(p));
   }
-  return "";
+  return waited;
 }
 
 std::string LiveTracking::OnCameraInfo(const CameraInfoMsg& m, const std::string& context) {
@@ -141,10 +143,29 @@ std::string LiveTracking::OnImage(const Header& header, const Image8& image,
       options_.camera_frame.empty() ? header.frame_id : options_.camera_frame;
   if (camera.empty())
     return context + ": the image has no frame_id; give the camera's frame (--camera-frame)";
+  std::string error = ReleaseWaiting();
+  tf_.Finish();
+  if (!tf_.Covers(palm_, camera, header.stamp_ns)) {
+    waiting_ = WaitingImage{header, image, context, camera};
+    return error;
+  }
+  const std::string e = Fuse(header, image, context, camera);
+  return error.empty() ? e : e.empty() ? error : error + "; " + e;
+}
+
+std::string LiveTracking::ReleaseWaiting() {
+  if (!waiting_) return "";
+  const WaitingImage w = std::move(*waiting_);
+  waiting_.reset();
+  return Fuse(w.header, w.image, w.context, w.camera);
+}
+
+std::string LiveTracking::Fuse(const Header& header, const Image8& image,
+                               const std::string& context, const std::string& camera) {
   std::optional<Pose> T_PC;
   try {
     tf_.Finish();
-    T_PC = tf_.Lookup(palm_, camera, header.stamp_ns, true);
+    T_PC = tf_.Lookup(palm_, camera, header.stamp_ns, true, kTfWait);
   } catch (const InputError& e) {
     return context + ": the camera's pose: " + e.what();
   }
@@ -159,7 +180,7 @@ std::string LiveTracking::OnImage(const Header& header, const Image8& image,
   return "";
 }
 
-void LiveTracking::OnTf(const TfMsg& m, bool is_static) {
+std::string LiveTracking::OnTf(const TfMsg& m, bool is_static) {
   for (const StampedTransform& t : m.transforms) {
     tf_.Add(t, is_static);
     if (!is_static && t.header.stamp_ns > newest_tf_ns_ + 1000000000) {
@@ -169,6 +190,10 @@ void LiveTracking::OnTf(const TfMsg& m, bool is_static) {
       tf_.Forget(newest_tf_ns_ - std::llround(options_.tf_window * 1e9));
     }
   }
+  if (!waiting_) return "";
+  tf_.Finish();
+  if (!tf_.Covers(palm_, waiting_->camera, waiting_->header.stamp_ns)) return "";
+  return ReleaseWaiting();
 }
 
 std::vector<std::string> LiveTracking::Summary() const {

@@ -72,8 +72,13 @@ class LiveTracking {
   std::string OnJointState(const JointStateMsg& m, const std::string& context,
                            std::vector<LivePose>& poses, std::vector<LiveEvent>& events);
   std::string OnCameraInfo(const CameraInfoMsg& m, const std::string& context);
+  // An image whose camera TF has not reached its stamp yet waits for it (one image at most):
+  // it is fused by the OnTf that brings that TF, or, holding the newest TF as before, by the
+  // first joint state more than kTfWait after it or by the next image. Returns "" then.
   std::string OnImage(const Header& header, const Image8& image, const std::string& context);
-  void OnTf(const TfMsg& m, bool is_static);
+  // Returns what a waiting image that it released could not use (empty: nothing, or used).
+  std::string OnTf(const TfMsg& m, bool is_static);
+  static constexpr std::int64_t kTfWait = 100000000;  // [ns] TfTree::Lookup's hold
 
   bool started() const { return started_; }
   std::int64_t origin_ns() const { return origin_ns_; }
@@ -103,6 +108,16 @@ class LiveTracking {
   Eigen::VectorXd q_, tau_;
   std::vector<TrackerEvent> taken_;
   std::optional<LiveImage> last_image_;
+  struct WaitingImage {
+    Header header;
+    Image8 image;
+    std::string context, camera;
+  };
+  std::optional<WaitingImage> waiting_;
+
+  std::string Fuse(const Header& header, const Image8& image, const std::string& context,
+                   const std::string& camera);
+  std::string ReleaseWaiting();
 
   std::string MapColumns(const JointStateMsg& m, const std::string& context);
   std::optional<Transform> StartPose(std::int64_t stamp_ns, std::string& error) const;

@@ -403,7 +403,7 @@ class Node {
       }
       tf.transforms.push_back(std::move(s));
     }
-    live_.OnTf(tf, is_static);
+    Complain(live_.OnTf(tf, is_static));
   }
   // The frames this node publishes (PREFIX<set>) are not the robot's.
   bool Ours(const std::string& child) const {

@@ -378,6 +378,15 @@ TEST(TfTree, ComposesInterpolatesAndNamesSplitTrees) {
   }
   EXPECT_FALSE(
       tree.Lookup("a", "b", 5000000000LL, true).has_value());  // 5 s beyond the last sample
+  // Covers: a lookup up to the dynamic edge's newest sample interpolates; after it, it would hold.
+  EXPECT_TRUE(tree.Covers("a", "b", 0));
+  EXPECT_TRUE(tree.Covers("b", "a", 1000));
+  EXPECT_FALSE(tree.Covers("a", "b", 1001));
+  EXPECT_TRUE(tree.Covers("a", "world", 1LL << 60));  // static only
+  EXPECT_FALSE(tree.Covers("a", "rock", 0));          // no chain
+  add("world", "b", 2000, B, false);
+  tree.Finish();
+  EXPECT_TRUE(tree.Covers("a", "b", 1001));
 }
 
 // A live tree forgets old samples but answers as before from the newest one before the cut on:

@@ -208,24 +208,25 @@ def main(inhand, node_bin, work):
                         tr.x, tr.y, tr.z = [float(v) for v in r[2:5]]
                         q = tf.transform.rotation
                         q.w, q.x, q.y, q.z = [float(v) for v in r[5:9]]
-                        pub_tf.publish(TFMessage(transforms=[tf]))
+                        if not deterministic:
+                            pub_tf.publish(TFMessage(transforms=[tf]))
                         ci = CameraInfo()
                         ci.header.stamp, ci.header.frame_id = st, "camera"
                         ci.width, ci.height, ci.distortion_model = cam["width"], cam["height"], "plumb_bob"
                         ci.D = cam.get("distortion", [0, 0, 0, 0, 0])
                         ci.K = [cam["fx"], 0, cam["cx"], 0, cam["fy"], cam["cy"], 0, 0, 1]
                         pub_ci.publish(ci)
-                        # TF and intrinsics before the image: the node looks the camera up at the
-                        # image's stamp and, when that TF has not arrived yet, holds the newest
-                        # one within 100 ms (the previous frame's, the palm having moved since).
-                        # TF comes on its own connection; under load 2 ms were once not enough
-                        # (jta 0.2 mm off replay at the end), so the deterministic run waits 20.
-                        time.sleep(0.02 if deterministic else 0.002)
+                        time.sleep(0.002)  # intrinsics (and TF) before the image
                         im = CompressedImage()
                         im.header.stamp, im.header.frame_id, im.format = st, "camera", "png"
                         im.data = images[r[0]]
                         pub_im.publish(im)
                         if deterministic:
+                            # The camera's TF 10 ms after its image, as a lagging TF comes: the
+                            # node must wait for it rather than hold the previous frame's (the
+                            # palm has moved since; jta ended 0.2-1 mm off replay when it held).
+                            time.sleep(0.01)
+                            pub_tf.publish(TFMessage(transforms=[tf]))
                             time.sleep(0.03)  # the image reaches the node before the next state
                 wait_for(lambda: all(len(received[s]) >= len(joints) for s in sets) or
                          node.poll() is not None, 60, "a pose for every joint state")

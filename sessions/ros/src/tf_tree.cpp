@@ -139,4 +139,20 @@ std::optional<Pose> TfTree::Lookup(const std::string& base_in, const std::string
   return Ta->Inverse() * *Tb;
 }
 
+bool TfTree::Covers(const std::string& base_in, const std::string& frame_in,
+                    std::int64_t t_ns) const {
+  const std::string base = Strip(base_in), frame = Strip(frame_in);
+  if (base == frame) return true;
+  std::vector<std::string> a = ToRoot(base), b = ToRoot(frame);
+  if (a.back() != b.back()) return false;
+  while (a.size() > 1 && b.size() > 1 && a[a.size() - 2] == b[b.size() - 2])
+    a.pop_back(), b.pop_back();
+  for (const std::vector<std::string>* chain : {&a, &b})
+    for (std::size_t i = 0; i + 1 < chain->size(); ++i) {
+      const Edge& e = edges_.at((*chain)[i]);
+      if (!e.is_static && (e.series.empty() || e.series.back().first < t_ns)) return false;
+    }
+  return true;
+}
+
 }  // namespace inhand::ros

@@ -31,6 +31,10 @@ class TfTree {
   std::optional<Pose> Lookup(const std::string& base, const std::string& frame, std::int64_t t_ns,
                              bool soft = false,
                              std::int64_t max_extrapolation_ns = 100000000) const;
+  // Whether every dynamic edge on the chain from `base` to `frame` has a sample at or after
+  // `t_ns`: a Lookup at t then interpolates rather than holding the newest sample. False when no
+  // chain joins them.
+  bool Covers(const std::string& base, const std::string& frame, std::int64_t t_ns) const;
   // Throws InputError naming both parts when no chain of edges joins `a` and `b`.
   void RequireConnected(const std::string& a, const std::string& b) const;
 
