@@ -70,6 +70,14 @@ std::set<std::string> TfTree::Component(const std::string& frame) const {
   return out;
 }
 
+std::pair<std::vector<std::string>, std::vector<std::string>> TfTree::ChainsToCommonAncestor(
+    const std::string& base, const std::string& frame) const {
+  std::vector<std::string> a = ToRoot(base), b = ToRoot(frame);
+  while (a.size() > 1 && b.size() > 1 && a[a.size() - 2] == b[b.size() - 2])
+    a.pop_back(), b.pop_back();
+  return {std::move(a), std::move(b)};
+}
+
 void TfTree::RequireConnected(const std::string& a_in, const std::string& b_in) const {
   const std::string a = Strip(a_in), b = Strip(b_in);
   if (a == b || ToRoot(a).back() == ToRoot(b).back()) return;
@@ -118,9 +126,7 @@ std::optional<Pose> TfTree::Lookup(const std::string& base_in, const std::string
   RequireConnected(base, frame);
   // Up from each to the common ancestor: T_base_frame = (T_root_base)^-1 T_root_frame, with the
   // shared part of the chains cancelled.
-  std::vector<std::string> a = ToRoot(base), b = ToRoot(frame);
-  while (a.size() > 1 && b.size() > 1 && a[a.size() - 2] == b[b.size() - 2])
-    a.pop_back(), b.pop_back();
+  const auto [a, b] = ChainsToCommonAncestor(base, frame);
   // Pose of chain[0] in chain.back(); a chain of one frame is the identity (no arithmetic, so a
   // single edge comes out exactly as recorded).
   const auto up = [&](const std::vector<std::string>& chain) -> std::optional<Pose> {
@@ -143,10 +149,8 @@ bool TfTree::Covers(const std::string& base_in, const std::string& frame_in,
                     std::int64_t t_ns) const {
   const std::string base = Strip(base_in), frame = Strip(frame_in);
   if (base == frame) return true;
-  std::vector<std::string> a = ToRoot(base), b = ToRoot(frame);
-  if (a.back() != b.back()) return false;
-  while (a.size() > 1 && b.size() > 1 && a[a.size() - 2] == b[b.size() - 2])
-    a.pop_back(), b.pop_back();
+  const auto [a, b] = ChainsToCommonAncestor(base, frame);
+  if (a.back() != b.back()) return false;  // no chain joins them
   for (const std::vector<std::string>* chain : {&a, &b})
     for (std::size_t i = 0; i + 1 < chain->size(); ++i) {
       const Edge& e = edges_.at((*chain)[i]);

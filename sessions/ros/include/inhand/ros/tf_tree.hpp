@@ -7,6 +7,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "inhand/ros/messages.hpp"
@@ -61,6 +62,10 @@ class TfTree {
   std::optional<Pose> EdgeAt(const std::string& child, const Edge& e, std::int64_t t_ns, bool soft,
                              std::int64_t max_ns) const;
   std::vector<std::string> ToRoot(const std::string& frame) const;
+  // The chains from `base` and from `frame` up to their lowest common ancestor (each ends with
+  // it); both end at their own roots when no chain joins them.
+  std::pair<std::vector<std::string>, std::vector<std::string>> ChainsToCommonAncestor(
+      const std::string& base, const std::string& frame) const;
 };
 
 }  // namespace inhand::ros
